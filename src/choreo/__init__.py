@@ -1,0 +1,12 @@
+"""choreo: music-to-dance generation, editing and evaluation.
+
+The core package holds what every generator shares: the SMPL-24 skeleton and kinematics,
+:class:`~choreo.motion.Motion`, music loading and features, motion file formats, datasets and the
+generator registry. Backends live in separate plugin packages registered through entry points.
+"""
+
+__version__ = "0.1.0"
+
+from .errors import ChoreoError  # noqa: E402
+
+__all__ = ["ChoreoError", "__version__"]

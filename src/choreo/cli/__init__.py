@@ -1,0 +1,54 @@
+"""The `choreo` command line: thin Typer commands over the library.
+
+Commands parse and validate arguments, call one library function, and print. Every
+:class:`~choreo.errors.ChoreoError` becomes one line on stderr and a non-zero exit code.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from .app import app
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; returns the exit code (also used by tests)."""
+    from ..errors import ChoreoError
+
+    try:
+        app(args=argv, prog_name="choreo", standalone_mode=False)
+    except ChoreoError as error:
+        _print_error(str(error))
+        return error.exit_code
+    except KeyboardInterrupt:
+        _print_error("interrupted")
+        return 130
+    except SystemExit as exit_:
+        return exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)
+    except Exception as error:  # click usage errors are handled inside; this is a bug
+        import click
+
+        if isinstance(error, click.exceptions.ClickException):
+            error.show()
+            return error.exit_code
+        if isinstance(error, click.exceptions.Abort):
+            _print_error("aborted")
+            return 1
+        if os.environ.get("CHOREO_DEBUG"):
+            raise
+        _print_error(f"internal error ({type(error).__name__}: {error}); set CHOREO_DEBUG=1 for a traceback")
+        return 70
+    return 0
+
+
+def _print_error(message: str) -> None:
+    first_line = message.strip().splitlines()[0] if message.strip() else "failed"
+    print(f"choreo: error: {first_line}", file=sys.stderr)
+
+
+def run() -> None:  # pragma: no cover - console script
+    sys.exit(main())
+
+
+__all__ = ["app", "main", "run"]

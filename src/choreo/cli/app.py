@@ -1,0 +1,22 @@
+"""The Typer application and its commands."""
+
+from __future__ import annotations
+
+import typer
+
+from . import commands
+
+app = typer.Typer(
+    name="choreo",
+    help="Music to dance: generate, edit, convert and evaluate skeleton animations.\n\n"
+    "Example: choreo info examples/drum_and_bass_174bpm.wav",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode="rich",
+)
+
+app.command("info")(commands.info)
+app.command("convert")(commands.convert)
+app.command("generators")(commands.generators)
+app.command("prepare")(commands.prepare)

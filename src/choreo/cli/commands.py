@@ -1,0 +1,125 @@
+"""Command implementations: parse, validate, call the library, print."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.table import Table
+
+from .progress import progress_bar, stderr_console, stdout_console
+
+AUDIO_EXTENSIONS = (".wav", ".mp3", ".ogg", ".flac", ".opus")
+
+
+def _require_file(path: Path) -> Path:
+    from ..errors import InputError
+
+    if not path.exists():
+        raise InputError(f"{path}: no such file")
+    if path.is_dir():
+        raise InputError(f"{path} is a folder, expected a file")
+    return path
+
+
+def info(
+    path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json) or an audio file."),
+) -> None:
+    """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats).
+
+    Examples:
+      choreo info dance.bvh
+      choreo info examples/drum_and_bass_174bpm.wav
+    """
+    _require_file(path)
+    table = Table(show_header=False, box=None)
+    table.add_row("file", str(path))
+    if path.suffix.lower() in AUDIO_EXTENSIONS:
+        from ..music import Music
+
+        music = Music.from_file(path)
+        table.add_row("kind", "audio")
+        table.add_row("duration", f"{music.duration:.2f} s")
+        table.add_row("tempo", f"{music.tempo:.1f} bpm")
+        table.add_row("beats", str(len(music.beat_times)))
+        table.add_row("feature frames", f"{music.num_frames} at {music.fps:g} fps")
+    else:
+        from ..formats import read_motion
+
+        motion = read_motion(path)
+        positions = motion.joint_positions()
+        table.add_row("kind", "motion")
+        table.add_row("frames", str(motion.num_frames))
+        table.add_row("fps", f"{motion.fps:g}")
+        table.add_row("duration", f"{motion.duration:.2f} s")
+        table.add_row("joints", f"{motion.num_joints} ({', '.join(motion.skeleton.names[:4])}, ...)")
+        extent = positions.max(axis=(0, 1)) - positions.min(axis=(0, 1))
+        table.add_row("extent", f"x {extent[0]:.2f} m, y {extent[1]:.2f} m, z {extent[2]:.2f} m")
+    stdout_console.print(table)
+
+
+def convert(
+    source: Path = typer.Argument(..., help="Input motion: .bvh, .npz (AIST++ keys), .pkl (AIST++), .json."),
+    target: str = typer.Argument(..., help="Output path, or - for stdout (needs --format)."),
+    format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
+    fps: Optional[float] = typer.Option(None, help="Resample to this frame rate."),
+) -> None:
+    """Convert a motion between BVH, NPZ, AIST++ pkl, JSON and joint-position .npy.
+
+    Examples:
+      choreo convert gBR_sBM_cAll_d04_mBR0_ch01.pkl dance.bvh --fps 30
+      choreo convert dance.bvh dance.npz
+      choreo convert dance.bvh - --format json | head
+    """
+    from ..formats import read_motion, write_motion
+
+    motion = read_motion(_require_file(source))
+    if fps is not None:
+        motion = motion.resample(fps)
+    written = write_motion(motion, target, format=format)
+    if target != "-":
+        stderr_console.print(f"wrote {written} ({motion.num_frames} frames at {motion.fps:g} fps)")
+
+
+def generators() -> None:
+    """List the installed generator backends (plugins in the `choreo.generators` entry-point group).
+
+    Example:
+      choreo generators
+    """
+    from ..generator import available_plugins
+
+    table = Table("name", "ready", "what it does")
+    for plugin in available_plugins().values():
+        ready = "yes" if plugin.ready else f"no - {plugin.status}"
+        table.add_row(plugin.name, ready, plugin.summary)
+    stdout_console.print(table)
+
+
+def prepare(
+    root: Path = typer.Argument(..., help="Dataset folder: M2D, AIST++ or BVH files with audio beside them."),
+    kind: Optional[str] = typer.Option(None, help="m2d, aistpp or bvh; detected from the layout if omitted."),
+    split: Optional[str] = typer.Option(None, help="train, test or all (default all)."),
+    window: float = typer.Option(5.0, help="Window length in seconds."),
+    stride: float = typer.Option(2.5, help="Window stride in seconds."),
+) -> None:
+    """Load a dataset once (fitting rotations, computing and caching music features) and summarise it.
+
+    Examples:
+      choreo prepare ../shared/data/m2d
+      choreo prepare ~/data/aistpp --split test --stride 0.5
+    """
+    from ..datasets import WindowConfig, WindowedDataset, load_dataset
+
+    with progress_bar(f"loading {root.name}") as update:
+        clips = load_dataset(root, kind=kind, split=split, progress=lambda done, total, name: update(done, total, name))
+    windows = WindowedDataset(clips, WindowConfig(seconds=window, stride_seconds=stride))
+    table = Table("clip", "genre", "split", "frames", "seconds")
+    for clip in clips:
+        table.add_row(clip.name, clip.genre or "-", clip.split or "-", str(clip.motion.num_frames),
+                      f"{clip.motion.duration:.1f}")
+    stdout_console.print(table)
+    total_seconds = sum(c.motion.duration for c in clips)
+    stdout_console.print(f"{len(clips)} clips, {total_seconds / 60:.1f} min, {len(windows)} windows of {window:g} s "
+                         f"(stride {stride:g} s)")

@@ -1,0 +1,60 @@
+"""Atomic output: a file either appears complete or not at all.
+
+Every writer in choreo goes through :func:`atomic_output`, so a crash, a bad input discovered halfway
+or Ctrl-C never leaves a truncated BVH/NPZ behind for a batch script to pick up.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import IO, Iterator
+
+from .errors import OutputError
+
+STDOUT = "-"
+
+
+def check_output_dir(path: str | os.PathLike) -> Path:
+    """Fail early, with one line, if ``path`` cannot be created; returns it as a Path."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OutputError(f"cannot write {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise OutputError(f"cannot write {path}: folder {folder} is not writable")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike, binary: bool = True) -> Iterator[IO]:
+    """Yield a file handle whose content replaces ``path`` only if the block succeeds.
+
+    ``path == "-"`` writes to stdout instead (buffered, so a failure still writes nothing).
+    """
+    if str(path) == STDOUT:
+        import io
+
+        buffer = io.BytesIO() if binary else io.StringIO()
+        yield buffer
+        stream = sys.stdout.buffer if binary else sys.stdout
+        stream.write(buffer.getvalue())
+        stream.flush()
+        return
+
+    target = check_output_dir(path)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, "wb" if binary else "w", encoding=None if binary else "utf-8") as handle:
+            yield handle
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.chmod(tmp_name, 0o644)
+        os.replace(tmp_name, target)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp_name)
+        raise

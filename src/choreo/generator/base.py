@@ -1,0 +1,45 @@
+"""What a generator backend is, as far as the core is concerned.
+
+Backends never read files or parse flags: they take a :class:`GenerationRequest` built from
+already-loaded :class:`~choreo.music.Music` and return a :class:`~choreo.motion.Motion`. The CLI
+and the writers do the rest, identically for every backend.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable
+
+if TYPE_CHECKING:  # keep `choreo generators` fast: no torch/librosa import for type hints
+    from ..motion import Motion
+    from ..music import Music
+
+
+@dataclass(frozen=True)
+class GenerationRequest:
+    music: "Music"
+    style: str | None = None  # a genre name, one-hot index or free-text description
+    seed: int | None = None
+    options: dict[str, Any] = field(default_factory=dict)  # backend-specific, validated by it
+
+
+class Generator(abc.ABC):
+    """A loaded backend, ready to turn music into motion."""
+
+    name: str = ""
+
+    @abc.abstractmethod
+    def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> "Motion":
+        """Dance to ``request.music``; ``progress`` receives the fraction done in [0, 1]."""
+
+
+@dataclass(frozen=True)
+class GeneratorPlugin:
+    """What a backend package registers under the ``choreo.generators`` entry-point group."""
+
+    name: str
+    summary: str
+    ready: bool  # False while the backend is a placeholder
+    status: str = ""  # shown when not ready: what is missing and where it is tracked
+    factory: Callable[..., Generator] | None = None  # builds a Generator (e.g. from a checkpoint)

@@ -1,0 +1,123 @@
+"""The `choreo` CLI: help texts, listings, conversions and one-line errors with no partial output."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from choreo.cli import main
+from choreo.motion import Motion
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLE_SONG = REPO / "examples" / "drum_and_bass_174bpm.wav"
+AISTPP_FIXTURES = REPO / "tests" / "fixtures" / "aistpp"
+COMMANDS = ["info", "convert", "generators", "prepare"]
+
+
+def run_cli(capsys, *args):
+    code = main(list(map(str, args)))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_error(code, err):
+    assert code != 0
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("choreo: error: ")
+    assert "Traceback" not in err
+
+
+def write_dance(path, frames=45, fps=30):
+    from choreo.formats import write_motion
+
+    rng = np.random.default_rng(0)
+    axis_angle = np.cumsum(rng.normal(scale=0.03, size=(frames, 24, 3)), axis=0)
+    root = np.cumsum(rng.normal(scale=0.01, size=(frames, 3)), axis=0) + [0, 0.95, 0]
+    motion = Motion.from_axis_angle(root, axis_angle, fps=fps)
+    write_motion(motion, path)
+    return motion
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_every_command_has_help_with_an_example(capsys, command):
+    code, out, _ = run_cli(capsys, command, "--help")
+    assert code == 0
+    assert "Example" in out and "choreo " + command in out
+
+
+def test_top_level_help(capsys):
+    code, out, _ = run_cli(capsys, "--help")
+    assert code == 0 and all(c in out for c in COMMANDS)
+
+
+def test_generators_lists_both_backends_and_says_they_are_placeholders(capsys):
+    code, out, _ = run_cli(capsys, "generators")
+    assert code == 0
+    assert "sgmd" in out and "graph" in out and "placeholder" in out
+
+
+def test_info_on_motion(tmp_path, capsys):
+    write_dance(tmp_path / "dance.bvh", frames=60)
+    code, out, _ = run_cli(capsys, "info", tmp_path / "dance.bvh")
+    assert code == 0
+    assert "60" in out and "2.00 s" in out and "24" in out
+
+
+def test_info_on_example_song(capsys):
+    code, out, _ = run_cli(capsys, "info", EXAMPLE_SONG)
+    assert code == 0
+    assert "bpm" in out and "beats" in out
+
+
+def test_convert_bvh_to_npz_and_back(tmp_path, capsys):
+    motion = write_dance(tmp_path / "dance.bvh")
+    assert run_cli(capsys, "convert", tmp_path / "dance.bvh", tmp_path / "dance.npz")[0] == 0
+    assert run_cli(capsys, "convert", tmp_path / "dance.npz", tmp_path / "again.bvh", "--fps", "60")[0] == 0
+    from choreo.formats import read_motion
+
+    again = read_motion(tmp_path / "again.bvh")
+    assert again.fps == 60 and again.num_frames == 2 * motion.num_frames
+    np.testing.assert_allclose(again.joint_positions()[::2], motion.joint_positions(), atol=1e-4)
+
+
+def test_convert_to_stdout(tmp_path, capsys):
+    write_dance(tmp_path / "dance.bvh")
+    code, out, _ = run_cli(capsys, "convert", tmp_path / "dance.bvh", "-", "--format", "bvh")
+    assert code == 0 and out.startswith("HIERARCHY")
+
+
+def test_non_audio_file_is_one_line_error(tmp_path, capsys):
+    fake = tmp_path / "song.mp3"
+    fake.write_text("this is not audio\n" * 50)
+    assert_one_line_error(*run_cli(capsys, "info", fake)[::2])
+
+
+def test_truncated_bvh_is_one_line_error_and_writes_nothing(tmp_path, capsys):
+    write_dance(tmp_path / "dance.bvh")
+    text = (tmp_path / "dance.bvh").read_text()
+    (tmp_path / "cut.bvh").write_text(text[: int(len(text) * 0.8)])
+    code, _, err = run_cli(capsys, "convert", tmp_path / "cut.bvh", tmp_path / "out.npz")
+    assert_one_line_error(code, err)
+    assert not (tmp_path / "out.npz").exists()
+
+
+def test_output_in_missing_folder_is_one_line_error(tmp_path, capsys):
+    write_dance(tmp_path / "dance.bvh")
+    code, _, err = run_cli(capsys, "convert", tmp_path / "dance.bvh", tmp_path / "nowhere" / "out.bvh")
+    assert_one_line_error(code, err)
+    assert not (tmp_path / "nowhere").exists()
+
+
+def test_missing_input_and_unknown_command(tmp_path, capsys):
+    assert_one_line_error(*run_cli(capsys, "info", tmp_path / "absent.bvh")[::2])
+    code, _, _ = run_cli(capsys, "no-such-command")
+    assert code != 0
+
+
+@pytest.mark.skipif(not AISTPP_FIXTURES.is_dir(), reason="AIST++ fixtures not generated")
+def test_prepare_summarises_a_dataset(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("CHOREO_CACHE_DIR", str(tmp_path / "cache"))
+    code, out, _ = run_cli(capsys, "prepare", AISTPP_FIXTURES, "--stride", "1")
+    assert code == 0
+    assert "clips" in out and "windows" in out
