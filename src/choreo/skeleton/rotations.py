@@ -25,6 +25,7 @@ __all__ = [
     "quaternion_multiply",
     "quaternion_conjugate",
     "quaternion_slerp",
+    "elementary_rotation",
     "euler_to_matrix",
     "matrix_to_euler",
 ]
@@ -210,6 +211,12 @@ def _axis_matrix(axis: str, angle: torch.Tensor) -> torch.Tensor:
         "Z": [c, -s, zero, s, c, zero, zero, zero, one],
     }[axis]
     return torch.stack(rows, dim=-1).reshape(angle.shape + (3, 3))
+
+
+@_numpy_in_numpy_out
+def elementary_rotation(angle: torch.Tensor, axis: str) -> torch.Tensor:
+    """(...,) angles in radians about one of the axes "X", "Y", "Z" -> (..., 3, 3)."""
+    return _axis_matrix(axis.upper(), angle)
 
 
 @_numpy_in_numpy_out

@@ -1,0 +1,345 @@
+"""BVH (Biovision Hierarchy) for the SMPL-24 skeleton.
+
+What we write, and what Blender's importer (default settings) turns into a human-sized dancer:
+- axes: Y up, +Z forward (the direction the body faces in the rest pose), +X the body's left,
+  right-handed; Blender's importer converts Y-up files to its Z-up world itself;
+- units: metres by default (Blender units are metres, so scale 1.0 gives a 1.7 m figure);
+  ``units="cm"`` writes centimetres, as many mocap tools expect;
+- channels: root ``Xposition Yposition Zposition Zrotation Xrotation Yrotation``, every other
+  joint ``Zrotation Xrotation Yrotation``; angles in degrees, intrinsic, so the joint's local
+  rotation is Rz @ Rx @ Ry; the rest pose is the SMPL template (all rotations zero).
+The reader accepts any well-formed BVH (any channel order per joint, End Sites) and maps joints
+named as in SMPL (pelvis, l_hip, ... ; also L_Hip, left_hip, m_avg_L_Hip) onto SMPL-24 in whatever
+order the file lists them. Units are detected from the skeleton's size (see :func:`detect_scale`).
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MotionFormatError
+from ..motion import Motion
+from ..skeleton import SMPL24, Skeleton, elementary_rotation, euler_to_matrix, matrix_to_euler
+
+ROTATION_ORDER = "ZXY"
+UNIT_SCALE = {"m": 1.0, "cm": 100.0}
+END_SITES = {  # short bones past the leaves so viewers draw a head, hands and toes
+    "head": (0.0, 0.1, 0.0), "l_hand": (0.08, 0.0, 0.0), "r_hand": (-0.08, 0.0, 0.0),
+    "l_foot": (0.0, 0.0, 0.06), "r_foot": (0.0, 0.0, 0.06),
+}  # fmt: skip
+
+
+@dataclass
+class BvhJoint:
+    name: str
+    parent: int
+    offset: np.ndarray
+    channels: list[str] = field(default_factory=list)
+    end_site: np.ndarray | None = None
+
+
+@dataclass
+class BvhData:
+    """A parsed BVH file, before any mapping onto a known skeleton."""
+
+    joints: list[BvhJoint]
+    frame_time: float
+    values: np.ndarray  # (T, total channels) as in the file
+
+    def channel_slices(self) -> list[slice]:
+        slices, start = [], 0
+        for joint in self.joints:
+            slices.append(slice(start, start + len(joint.channels)))
+            start += len(joint.channels)
+        return slices
+
+
+# -- writing ---------------------------------------------------------------------------------
+def write_bvh(motion: Motion, handle, units: str = "m") -> None:
+    """Write ``motion`` (SMPL-24 topology) as BVH text to a binary handle."""
+    if units not in UNIT_SCALE:
+        raise MotionFormatError(f"unknown BVH units {units!r} (use m or cm)")
+    if len(motion.skeleton.names) != 24 or motion.skeleton.parents != SMPL24.parents:
+        raise MotionFormatError("BVH export supports the SMPL-24 skeleton only")
+    scale = UNIT_SCALE[units]
+    text = io.StringIO()
+    _write_hierarchy(text, motion.skeleton, scale)
+    _write_frames(text, motion, scale)
+    handle.write(text.getvalue().encode())
+
+
+def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float) -> None:
+    out.write("HIERARCHY\n")
+    rotation_channels = " ".join(f"{axis}rotation" for axis in ROTATION_ORDER)
+
+    def write_joint(j: int, depth: int) -> None:
+        pad = "\t" * depth
+        keyword = "ROOT" if skeleton.parents[j] < 0 else "JOINT"
+        offset = skeleton.offsets[j] * scale
+        out.write(f"{pad}{keyword} {skeleton.names[j]}\n{pad}{{\n")
+        out.write(f"{pad}\tOFFSET {offset[0]:.6f} {offset[1]:.6f} {offset[2]:.6f}\n")
+        if keyword == "ROOT":
+            out.write(f"{pad}\tCHANNELS 6 Xposition Yposition Zposition {rotation_channels}\n")
+        else:
+            out.write(f"{pad}\tCHANNELS 3 {rotation_channels}\n")
+        children = skeleton.children(j)
+        for child in children:
+            write_joint(child, depth + 1)
+        if not children:
+            end = np.array(END_SITES.get(skeleton.names[j], (0.0, 0.05, 0.0))) * scale
+            out.write(f"{pad}\tEnd Site\n{pad}\t{{\n{pad}\t\tOFFSET {end[0]:.6f} {end[1]:.6f} {end[2]:.6f}\n{pad}\t}}\n")
+        out.write(f"{pad}}}\n")
+
+    write_joint(0, 0)
+
+
+def _depth_first_order(skeleton: Skeleton) -> list[int]:
+    order, stack = [], [0]
+    while stack:
+        j = stack.pop()
+        order.append(j)
+        stack.extend(reversed(skeleton.children(j)))
+    return order
+
+
+def _write_frames(out: io.StringIO, motion: Motion, scale: float) -> None:
+    order = _depth_first_order(motion.skeleton)  # channels follow the hierarchy's listing order
+    angles = np.degrees(matrix_to_euler(motion.rotation_matrices(), ROTATION_ORDER))  # (T, J, 3)
+    values = np.concatenate([motion.root_positions * scale, angles[:, order].reshape(motion.num_frames, -1)], axis=1)
+    out.write(f"MOTION\nFrames: {motion.num_frames}\nFrame Time: {1.0 / motion.fps:.8f}\n")
+    np.savetxt(out, values, fmt="%.6f", delimiter=" ")
+
+
+# -- reading ---------------------------------------------------------------------------------
+def _tokens_with_lines(text: str):
+    for number, line in enumerate(text.splitlines(), start=1):
+        for token in line.split():
+            yield token, number
+
+
+def read_bvh_raw(path: str | Path) -> BvhData:
+    """Parse any BVH file into joints, channels and per-frame values; raises MotionFormatError."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="strict")
+    except UnicodeDecodeError:
+        raise MotionFormatError(f"{path} is not a BVH text file") from None
+    return parse_bvh(text, str(path))
+
+
+def parse_bvh(text: str, name: str = "BVH") -> BvhData:
+    head, sep, motion_part = text.partition("MOTION")
+    if not sep:
+        raise MotionFormatError(f"{name}: no MOTION section (truncated or not a BVH file)")
+    joints = _parse_hierarchy(head, name)
+    frame_count, frame_time, rows, first_row_line = _parse_motion_header(motion_part, name, text.count("\n", 0, len(head)) + 1)
+    num_channels = sum(len(j.channels) for j in joints)
+    if len(rows) < frame_count:
+        raise MotionFormatError(f"{name}: truncated, {len(rows)} of {frame_count} frames present")
+    try:
+        values = np.array([row.split() for row in rows[:frame_count]], dtype=np.float64)
+    except ValueError:
+        for i, row in enumerate(rows[:frame_count]):
+            parts = row.split()
+            if len(parts) != num_channels:
+                raise MotionFormatError(f"{name}: line {first_row_line + i} has {len(parts)} values, expected {num_channels}") from None
+            try:
+                [float(p) for p in parts]
+            except ValueError:
+                raise MotionFormatError(f"{name}: line {first_row_line + i} has a non-numeric value") from None
+        raise MotionFormatError(f"{name}: malformed frame data") from None
+    if frame_count and values.shape != (frame_count, num_channels):
+        raise MotionFormatError(f"{name}: frames have {values.shape[-1]} values, expected {num_channels}")
+    values = values.reshape(frame_count, num_channels)
+    if not np.isfinite(values).all():
+        bad = int(np.argwhere(~np.isfinite(values))[0, 0])
+        raise MotionFormatError(f"{name}: line {first_row_line + bad} contains NaN or infinite values")
+    return BvhData(joints, frame_time, values)
+
+
+def _parse_hierarchy(head: str, name: str) -> list[BvhJoint]:
+    tokens = list(_tokens_with_lines(head))
+    if not tokens or tokens[0][0] != "HIERARCHY":
+        raise MotionFormatError(f"{name}: not a BVH file (no HIERARCHY header)")
+    joints: list[BvhJoint] = []
+    stack: list[int] = []  # open joints; -1 marks an open End Site
+    i = 1
+
+    def take(count: int) -> list[tuple[str, int]]:
+        nonlocal i
+        if i + count > len(tokens):
+            raise MotionFormatError(f"{name}: hierarchy ends unexpectedly (truncated file?)")
+        out = tokens[i: i + count]
+        i += count
+        return out
+
+    def floats(items, line) -> np.ndarray:
+        try:
+            values = np.array([float(t) for t, _ in items])
+        except ValueError:
+            raise MotionFormatError(f"{name}: line {line}: expected numbers") from None
+        if not np.isfinite(values).all():
+            raise MotionFormatError(f"{name}: line {line}: NaN or infinite offset")
+        return values
+
+    while i < len(tokens):
+        token, line = tokens[i]
+        i += 1
+        if token in ("ROOT", "JOINT"):
+            (joint_name, _), = take(1)
+            if token == "ROOT" and joints:
+                raise MotionFormatError(f"{name}: line {line}: more than one ROOT is not supported")
+            parent = stack[-1] if stack else -1
+            if token == "JOINT" and parent < 0:
+                raise MotionFormatError(f"{name}: line {line}: JOINT outside a ROOT")
+            joints.append(BvhJoint(joint_name, parent, np.zeros(3)))
+            stack.append(len(joints) - 1)
+        elif token == "End":
+            take(1)  # "Site"
+            stack.append(-1)
+        elif token == "{":
+            continue
+        elif token == "}":
+            if not stack:
+                raise MotionFormatError(f"{name}: line {line}: unbalanced braces")
+            stack.pop()
+        elif token == "OFFSET":
+            offset = floats(take(3), line)
+            if not stack:
+                raise MotionFormatError(f"{name}: line {line}: OFFSET outside a joint")
+            if stack[-1] == -1:
+                joints[stack[-2]].end_site = offset
+            else:
+                joints[stack[-1]].offset = offset
+        elif token == "CHANNELS":
+            (count_text, _), = take(1)
+            try:
+                count = int(count_text)
+            except ValueError:
+                raise MotionFormatError(f"{name}: line {line}: bad channel count {count_text!r}") from None
+            channels = [t.lower() for t, _ in take(count)]
+            valid = {f"{axis}{kind}" for axis in "xyz" for kind in ("position", "rotation")}
+            if any(c not in valid for c in channels) or not stack or stack[-1] < 0:
+                raise MotionFormatError(f"{name}: line {line}: bad CHANNELS declaration")
+            joints[stack[-1]].channels = channels
+        else:
+            raise MotionFormatError(f"{name}: line {line}: unexpected {token!r} in HIERARCHY")
+    if stack:
+        raise MotionFormatError(f"{name}: hierarchy is truncated (unclosed braces)")
+    if not joints:
+        raise MotionFormatError(f"{name}: hierarchy has no joints")
+    return joints
+
+
+def _parse_motion_header(part: str, name: str, line_offset: int) -> tuple[int, float, list[str], int]:
+    lines = part.split("\n")
+    header = [(k, line) for k, line in enumerate(lines) if line.strip()]
+    if len(header) < 2:
+        raise MotionFormatError(f"{name}: MOTION section is truncated")
+    frames_match = re.match(r"\s*Frames:\s*(\d+)\s*$", header[0][1])
+    time_match = re.match(r"\s*Frame\s+Time:\s*([0-9.eE+-]+)\s*$", header[1][1])
+    if not frames_match or not time_match:
+        raise MotionFormatError(f"{name}: MOTION section lacks 'Frames:' and 'Frame Time:' lines")
+    frame_time = float(time_match.group(1))
+    if not np.isfinite(frame_time) or frame_time <= 0:
+        raise MotionFormatError(f"{name}: bad Frame Time {time_match.group(1)}")
+    first = header[1][0] + 1
+    rows = [line for line in lines[first:] if line.strip()]
+    return int(frames_match.group(1)), frame_time, rows, line_offset + first
+
+
+# -- mapping onto SMPL-24 --------------------------------------------------------------------
+def _normalise_joint_name(name: str) -> str:
+    name = name.lower()
+    for prefix in ("m_avg_", "f_avg_", "smpl_", "mixamorig:"):
+        if name.startswith(prefix):
+            name = name[len(prefix):]
+    name = re.sub(r"^left[_ ]?", "l_", name)
+    name = re.sub(r"^right[_ ]?", "r_", name)
+    return re.sub(r"[^a-z0-9]", "", name)
+
+
+SMPL_NAME_INDEX = {_normalise_joint_name(n): i for i, n in enumerate(SMPL24.names)}
+
+
+def detect_scale(rest_positions: np.ndarray) -> float:
+    """Factor that turns the file's units into metres, judged by the figure's size.
+
+    A human skeleton spans about 1-2 units in metres, 100-200 in centimetres, 1000+ in millimetres.
+    """
+    extent = float(np.ptp(rest_positions, axis=0).max()) if len(rest_positions) > 1 else 0.0
+    if extent > 300.0:
+        return 0.001
+    if extent > 10.0:
+        return 0.01
+    return 1.0
+
+
+def _local_rotations(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
+    """(T, J, 3, 3) local rotations and (T, 3) root positions in file units."""
+    frames = len(data.values)
+    rotmats = np.broadcast_to(np.eye(3), (frames, len(data.joints), 3, 3)).copy()
+    root = np.tile(data.joints[0].offset, (frames, 1))
+    ignored_positions = False
+    for j, (joint, channels) in enumerate(zip(data.joints, data.channel_slices())):
+        values = data.values[:, channels]
+        rotation_axes = [c[0].upper() for c in joint.channels if c.endswith("rotation")]
+        rotation_values = np.radians(values[:, [k for k, c in enumerate(joint.channels) if c.endswith("rotation")]])
+        if len(rotation_axes) == 3 and len(set(rotation_axes)) == 3:
+            rotmats[:, j] = euler_to_matrix(rotation_values, "".join(rotation_axes))
+        else:  # unusual files: any number of rotation channels, composed in listed order
+            for k, axis in enumerate(rotation_axes):
+                rotmats[:, j] = rotmats[:, j] @ elementary_rotation(rotation_values[:, k], axis)
+        position_channels = {c[0]: k for k, c in enumerate(joint.channels) if c.endswith("position")}
+        if position_channels and j == 0:
+            for axis_index, axis in enumerate("xyz"):
+                if axis in position_channels:
+                    root[:, axis_index] = values[:, position_channels[axis]] + joint.offset[axis_index]
+        elif position_channels:
+            ignored_positions = True
+    if ignored_positions:
+        warnings.warn("BVH position channels on non-root joints are ignored (bone offsets are used)")
+    return rotmats, root
+
+
+def bvh_to_motion(data: BvhData, name: str = "BVH", units: str = "auto") -> Motion:
+    """Map a parsed BVH onto SMPL-24 (joint names as in SMPL, any order); other skeletons fail."""
+    index = {}
+    for j, joint in enumerate(data.joints):
+        key = _normalise_joint_name(joint.name)
+        if key in SMPL_NAME_INDEX and SMPL_NAME_INDEX[key] not in index.values():
+            index[j] = SMPL_NAME_INDEX[key]
+    if len(index) != 24 or len(data.joints) != 24:
+        listed = ", ".join(j.name for j in data.joints[:6]) + (", ..." if len(data.joints) > 6 else "")
+        raise MotionFormatError(
+            f"{name}: skeleton is not SMPL-24 (found {len(data.joints)} joints: {listed})")
+    to_smpl = np.array([index[j] for j in range(24)])
+    file_parents = [index[j.parent] if j.parent >= 0 else -1 for j in data.joints]
+    for j in range(24):
+        if file_parents[j] != SMPL24.parents[to_smpl[j]]:
+            raise MotionFormatError(f"{name}: joint {data.joints[j].name} has the wrong parent for SMPL-24")
+    rotmats_file, root = _local_rotations(data)
+    offsets = np.zeros((24, 3))
+    rotmats = np.zeros_like(rotmats_file)
+    offsets[to_smpl] = np.array([j.offset for j in data.joints])
+    rotmats[:, to_smpl] = rotmats_file
+    skeleton = SMPL24.with_offsets(offsets)
+    scale = detect_scale(skeleton.rest_positions()) if units == "auto" else 1.0 / UNIT_SCALE[units]
+    skeleton = SMPL24.with_offsets(offsets * scale)
+    fps = 1.0 / data.frame_time
+    fps = round(fps) if abs(fps - round(fps)) < 1e-3 else fps
+    if len(data.values) == 0:
+        raise MotionFormatError(f"{name}: no frames")
+    return Motion.from_rotation_matrices(root * scale, rotmats, fps=float(fps), skeleton=skeleton,
+                                         metadata={"source": name})
+
+
+def read_bvh(path: str | Path, units: str = "auto") -> Motion:
+    """Read a BVH file whose skeleton is SMPL-24 (by joint names) into a Motion in metres."""
+    return bvh_to_motion(read_bvh_raw(path), str(path), units)

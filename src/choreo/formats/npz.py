@@ -1,0 +1,65 @@
+"""NPZ with the AIST++ keys, plus what a reader needs to be self-sufficient.
+
+Keys written: ``smpl_poses`` (T, 72) axis-angle, ``smpl_trans`` (T, 3) metres, ``smpl_scaling``
+(1,) = 1, ``fps``, ``joint_positions`` (T, 24, 3) metres Y-up (for metrics without FK),
+``offsets`` (24, 3) the skeleton's bone offsets, and ``metadata`` (a JSON string). Any NPZ with
+``smpl_poses`` and ``smpl_trans`` reads back; fps defaults to 30 when absent.
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+
+import numpy as np
+
+from ..errors import MotionFormatError
+from ..motion import Motion
+from ..skeleton import SMPL24
+from .smpl_params import motion_to_smpl_params, smpl_params_to_motion
+
+DEFAULT_FPS = 30.0
+
+
+def write_npz(motion: Motion, handle) -> None:
+    arrays = motion_to_smpl_params(motion)
+    arrays["fps"] = np.array(motion.fps, dtype=np.float64)
+    arrays["joint_positions"] = motion.joint_positions().astype(np.float32)
+    arrays["offsets"] = motion.skeleton.offsets.astype(np.float64)
+    arrays["metadata"] = np.array(json.dumps(motion.metadata, default=str))
+    np.savez(handle, **arrays)
+
+
+def _load(path) -> dict[str, np.ndarray]:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {key: data[key] for key in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as error:
+        raise MotionFormatError(f"{path}: not a readable NPZ file ({type(error).__name__})") from None
+
+
+def read_npz(path) -> Motion:
+    data = _load(path)
+    if "smpl_poses" not in data or "smpl_trans" not in data:
+        raise MotionFormatError(f"{path}: NPZ lacks the smpl_poses and smpl_trans arrays")
+    fps = float(np.asarray(data["fps"]).reshape(-1)[0]) if "fps" in data else DEFAULT_FPS
+    motion = smpl_params_to_motion(data["smpl_poses"], data["smpl_trans"], data.get("smpl_scaling"), fps, str(path))
+    if "offsets" in data and np.asarray(data["offsets"]).shape == (24, 3):
+        offsets = np.asarray(data["offsets"], dtype=np.float64)
+        if np.isfinite(offsets).all():
+            motion = motion.with_skeleton(SMPL24.with_offsets(offsets))
+    if "metadata" in data:
+        try:
+            metadata = json.loads(str(data["metadata"]))
+            if isinstance(metadata, dict):
+                motion.metadata = {**metadata, "source": str(path)}
+        except ValueError:
+            pass
+    return motion
+
+
+def read_npz_joint_positions(path) -> np.ndarray | None:
+    """The stored (T, 24, 3) joint positions, if the file has them."""
+    data = _load(path)
+    positions = data.get("joint_positions")
+    return None if positions is None else np.asarray(positions, dtype=np.float64)

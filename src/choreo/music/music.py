@@ -1,0 +1,98 @@
+"""`Music`: a song as the generators and metrics see it, features aligned with motion frames."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..errors import ParameterError
+from .audio import check_usable, iter_audio_blocks
+from .features import BEAT_COLUMN, FEATURE_DIM, FPS, HOP_LENGTH, SAMPLE_RATE, assemble_features, frame_features, stream_features
+
+
+@dataclass(frozen=True, eq=False)
+class Music:
+    """Features of a song (or an excerpt) at ``fps``.
+
+    Attributes:
+        path: the audio file, or None for music built from an array.
+        duration: seconds of audio covered.
+        fps: feature frames per second (30).
+        features: (T, 35) float32, T = floor(duration * fps); see choreo.music.features for columns.
+        beat_times: (B,) seconds from the start of the excerpt.
+        tempo: estimated global tempo in beats per minute (0 when no beat was found).
+    """
+
+    path: Path | None
+    duration: float
+    fps: float
+    features: np.ndarray
+    beat_times: np.ndarray
+    tempo: float
+
+    @property
+    def num_frames(self) -> int:
+        return len(self.features)
+
+    @property
+    def beat_frames(self) -> np.ndarray:
+        """Frame indices of the beats (the frames whose beat one-hot is set)."""
+        return np.flatnonzero(self.features[:, BEAT_COLUMN] > 0.5)
+
+    def slice_frames(self, start: int, stop: int) -> np.ndarray:
+        """(stop - start, 35) features of frames [start, stop), zero-padded past the end."""
+        if start < 0 or stop < start:
+            raise ParameterError(f"bad frame range {start}:{stop}")
+        window = self.features[start:stop]
+        if len(window) < stop - start:
+            pad = np.zeros((stop - start - len(window), FEATURE_DIM), np.float32)
+            window = np.concatenate([window, pad])
+        return window
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike, *, start: float | None = None, end: float | None = None,
+                  progress: Callable[[float, float], None] | None = None) -> "Music":
+        """Decode and featurise ``path`` (or its [start, end] seconds) in constant memory.
+
+        ``progress(done_seconds, total_seconds)`` is called as blocks are processed.
+        """
+        path = Path(path)
+        if start is not None and start < 0:
+            raise ParameterError(f"start must be >= 0 seconds, got {start}")
+        if end is not None and start is not None and end <= start:
+            raise ParameterError(f"end ({end}) must come after start ({start})")
+        report = None
+        if progress is not None:
+            from .audio import audio_duration
+
+            total = (end if end is not None else audio_duration(path)) - (start or 0.0)
+            report = lambda done: progress(min(done, total), total)  # noqa: E731
+        blocks = iter_audio_blocks(path, SAMPLE_RATE, start, end)
+        features, tempo, beat_frames = stream_features(blocks, str(path), progress=report)
+        return cls(path=path, duration=_duration(features), fps=float(FPS),
+                   features=features, beat_times=beat_frames / FPS, tempo=tempo)
+
+    @classmethod
+    def from_array(cls, samples: np.ndarray, sr: int) -> "Music":
+        """Featurise an in-memory mono signal (tests, synthesised audio)."""
+        samples = np.asarray(samples, dtype=np.float32)
+        if samples.ndim != 1:
+            raise ParameterError("from_array expects a mono signal of shape (N,)")
+        if sr != SAMPLE_RATE:
+            import soxr
+
+            samples = soxr.resample(samples, sr, SAMPLE_RATE).astype(np.float32)
+        check_usable(samples, SAMPLE_RATE, "audio array")
+        num_frames = len(samples) // HOP_LENGTH
+        per_frame = frame_features(samples)[:num_frames]
+        features, tempo, beat_frames = assemble_features(per_frame, FPS)
+        return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
+                   beat_times=beat_frames / FPS, tempo=tempo)
+
+
+def _duration(features: np.ndarray) -> float:
+    return len(features) / FPS
