@@ -5,6 +5,7 @@ from __future__ import annotations
 import typer
 
 from . import commands
+from .eval_command import evaluate
 
 app = typer.Typer(
     name="choreo",
@@ -20,3 +21,4 @@ app.command("info")(commands.info)
 app.command("convert")(commands.convert)
 app.command("generators")(commands.generators)
 app.command("prepare")(commands.prepare)
+app.command("eval")(evaluate)

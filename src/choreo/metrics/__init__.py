@@ -1,5 +1,15 @@
-"""The field's dance metrics."""
+"""The field's dance metrics: BeatAlign, PFC, FID_k/FID_g, Div_k/Div_g, beat distances."""
 
 from .beats import MetricWarning, beat_align_score, beat_distances, mean_joint_speed, motion_beats
+from .evaluate import Dance, DanceScore, EvaluationReport, evaluate, resample_positions
+from .fid import diversity, frechet_distance, motion_features, normalise_by_reference, prepare_positions
+from .geometric import geometric_features
+from .kinetic import kinetic_features
+from .pfc import foot_contact_score, physical_foot_contact
 
-__all__ = ["MetricWarning", "beat_align_score", "beat_distances", "mean_joint_speed", "motion_beats"]
+__all__ = [
+    "Dance", "DanceScore", "EvaluationReport", "MetricWarning", "beat_align_score", "beat_distances",
+    "diversity", "evaluate", "foot_contact_score", "frechet_distance", "geometric_features", "kinetic_features",
+    "mean_joint_speed", "motion_beats", "motion_features", "normalise_by_reference", "physical_foot_contact",
+    "prepare_positions", "resample_positions",
+]  # fmt: skip

@@ -49,6 +49,7 @@ REST_OFFSETS = (
 # Joints the field's metrics and losses refer to by index.
 LEFT_ANKLE, RIGHT_ANKLE, LEFT_FOOT, RIGHT_FOOT = 7, 8, 10, 11
 FOOT_JOINTS = (LEFT_ANKLE, RIGHT_ANKLE, LEFT_FOOT, RIGHT_FOOT)  # order of the 4 contact channels
+LEFT_ANKLE_FOOT, RIGHT_ANKLE_FOOT = (LEFT_ANKLE, LEFT_FOOT), (RIGHT_ANKLE, RIGHT_FOOT)
 LOWER_BODY_JOINTS = (0, 1, 2, 4, 5, 7, 8, 10, 11)
 UPPER_BODY_JOINTS = tuple(j for j in range(24) if j not in LOWER_BODY_JOINTS)
 

@@ -1,0 +1,134 @@
+"""Evaluate a set of dances against a ground-truth set: every metric of the field in one report."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .beats import beat_align_score, beat_distances, motion_beats
+from .fid import diversity, frechet_distance, motion_features, normalise_by_reference
+from .pfc import foot_contact_score, PFC_SCALE
+
+
+@dataclass
+class Dance:
+    """One motion to score: joint positions and, when known, the music beats it dances to."""
+
+    name: str
+    positions: np.ndarray  # (T, 24, 3) metres, Y up, at the evaluation frame rate
+    music_beats: np.ndarray | None = None  # beat frame indices at the same frame rate
+
+
+@dataclass
+class DanceScore:
+    name: str
+    frames: int
+    seconds: float
+    beat_align: float | None
+    pfc: float  # this clip's PFC term x 10,000
+    motion_to_music: float | None  # ChoreoGraph's mean squared beat distances, frames^2
+    music_to_motion: float | None
+
+
+@dataclass
+class EvaluationReport:
+    fps: float
+    generated_count: int
+    ground_truth_count: int
+    mean_clip_seconds: float
+    beat_align: float | None  # mean over clips with music
+    pfc: float
+    fid_k: float
+    fid_g: float
+    div_k: float
+    div_g: float
+    ground_truth_div_k: float
+    ground_truth_div_g: float
+    ground_truth_beat_align: float | None
+    ground_truth_pfc: float
+    motion_to_music: float | None
+    music_to_motion: float | None
+    clips: list[DanceScore] = field(default_factory=list)
+    ground_truth_clips: list[DanceScore] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def score_dance(dance: Dance, fps: float) -> DanceScore:
+    beats = motion_beats(dance.positions)
+    align = m2m = music2m = None
+    if dance.music_beats is not None:
+        align = beat_align_score(dance.music_beats, beats)
+        m2m, music2m = beat_distances(dance.music_beats, beats)
+    return DanceScore(dance.name, len(dance.positions), len(dance.positions) / fps, align,
+                      foot_contact_score(dance.positions) * PFC_SCALE, m2m, music2m)
+
+
+def _mean_of(values) -> float | None:
+    values = [v for v in values if v is not None and np.isfinite(v)]
+    return float(np.mean(values)) if values else None
+
+
+def evaluate(generated: Sequence[Dance], ground_truth: Sequence[Dance], fps: float = 30.0,
+             progress: Callable[[int, int], None] | None = None) -> EvaluationReport:
+    """Score ``generated`` against ``ground_truth`` (features normalised by the ground truth)."""
+    total = len(generated) + len(ground_truth)
+    features = []
+    for done, dance in enumerate([*generated, *ground_truth]):
+        features.append(motion_features(dance.positions))
+        if progress:
+            progress(done + 1, total)
+    kinetic = np.stack([k for k, _ in features])
+    geometric = np.stack([g for _, g in features])
+    n = len(generated)
+    gen_k, gt_k = normalise_by_reference(kinetic[:n], kinetic[n:])
+    gen_g, gt_g = normalise_by_reference(geometric[:n], geometric[n:])
+    scores = [score_dance(d, fps) for d in generated]
+    truth_scores = [score_dance(d, fps) for d in ground_truth]
+    return EvaluationReport(
+        fps=fps, generated_count=n, ground_truth_count=len(ground_truth),
+        mean_clip_seconds=float(np.mean([s.seconds for s in scores])) if scores else 0.0,
+        beat_align=_mean_of(s.beat_align for s in scores), pfc=float(np.nanmean([s.pfc for s in scores])),
+        fid_k=frechet_distance(gen_k, gt_k), fid_g=frechet_distance(gen_g, gt_g),
+        div_k=diversity(gen_k), div_g=diversity(gen_g),
+        ground_truth_div_k=diversity(gt_k), ground_truth_div_g=diversity(gt_g),
+        ground_truth_beat_align=_mean_of(s.beat_align for s in truth_scores),
+        ground_truth_pfc=float(np.nanmean([s.pfc for s in truth_scores])),
+        motion_to_music=_mean_of(s.motion_to_music for s in scores),
+        music_to_motion=_mean_of(s.music_to_motion for s in scores),
+        clips=scores, ground_truth_clips=truth_scores,
+    )  # fmt: skip
+
+
+def resample_positions(positions: np.ndarray, source_fps: float, target_fps: float) -> np.ndarray:
+    """Linear resampling of joint positions in time, keeping the duration."""
+    if np.isclose(source_fps, target_fps):
+        return positions
+    frames = max(1, int(round(len(positions) * target_fps / source_fps)))
+    times = np.clip(np.arange(frames) * source_fps / target_fps, 0, len(positions) - 1)
+    lower = np.floor(times).astype(int)
+    upper = np.minimum(lower + 1, len(positions) - 1)
+    weight = (times - lower)[:, None, None]
+    return (1 - weight) * positions[lower] + weight * positions[upper]
+
+
+MOTION_EXTENSIONS = (".bvh", ".npz", ".pkl", ".json", ".npy")
+
+
+def collect_motion_files(path: Path) -> list[Path]:
+    """A single motion file, or every motion file in a folder (not recursive), sorted."""
+    from ..errors import InputError
+
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file or folder")
+    if path.is_file():
+        return [path]
+    files = sorted(p for p in path.iterdir() if p.suffix.lower() in MOTION_EXTENSIONS and p.is_file())
+    if not files:
+        raise InputError(f"{path}: no motion files ({', '.join(MOTION_EXTENSIONS)})")
+    return files
