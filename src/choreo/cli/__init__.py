@@ -26,13 +26,13 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except SystemExit as exit_:
         return exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)
-    except Exception as error:  # click usage errors are handled inside; this is a bug
-        import click
-
-        if isinstance(error, click.exceptions.ClickException):
+    except Exception as error:
+        # Usage errors (unknown command, bad option) come from click, which typer may vendor: they
+        # know how to show themselves. Anything else is a bug.
+        if callable(getattr(error, "show", None)) and isinstance(getattr(error, "exit_code", None), int):
             error.show()
             return error.exit_code
-        if isinstance(error, click.exceptions.Abort):
+        if type(error).__name__ == "Abort":
             _print_error("aborted")
             return 1
         if os.environ.get("CHOREO_DEBUG"):

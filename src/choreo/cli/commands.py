@@ -38,7 +38,8 @@ def info(
     if path.suffix.lower() in AUDIO_EXTENSIONS:
         from ..music import Music
 
-        music = Music.from_file(path)
+        with progress_bar(f"analysing {path.name}") as update:
+            music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)))
         table.add_row("kind", "audio")
         table.add_row("duration", f"{music.duration:.2f} s")
         table.add_row("tempo", f"{music.tempo:.1f} bpm")
