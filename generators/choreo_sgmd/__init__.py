@@ -1,14 +1,56 @@
 """SGMD: style-guided motion diffusion (Wang et al.), the `choreo generate` backend.
 
-Placeholder until the SGMD generator issue lands: it registers itself so `choreo generators`
-shows it, and says plainly that it cannot generate yet.
+Work in progress: the denoiser, schedule and samplers, style prompts, long-form sampling and the
+training loop are here and tested; the default checkpoint is not trained and evaluated yet, so
+the plugin reports itself as not ready and `choreo generate` is not offered.
 """
 
+from __future__ import annotations
+
+from pathlib import Path
+
 from choreo.generator import GeneratorPlugin
+
+
+def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = "cpu", resume: bool = False,
+                       max_steps: int | None = None, prompt_kind: str = "description", batch_size: int | None = None,
+                       progress=None, load_progress=None) -> Path:
+    """Train on a dataset folder (M2D, AIST++ or BVH+audio): its train split, validated on its test split."""
+    from dataclasses import replace
+
+    from choreo.datasets import TEST, TRAIN, WindowConfig, load_dataset
+
+    from .config import TrainConfig, model_config
+    from .data import windows_to_tensors
+    from .style import style_dim
+    from .training import train
+
+    train_config = TrainConfig(prompt_kind=prompt_kind)
+    if max_steps is not None:
+        train_config = replace(train_config, max_steps=max_steps)
+    if batch_size is not None:
+        train_config = replace(train_config, batch_size=batch_size)
+    model = model_config(config, style_dim=style_dim(prompt_kind))
+    clips = load_dataset(data_dir, progress=load_progress)
+    train_clips = [c for c in clips if c.split in (TRAIN, None)]
+    test_clips = [c for c in clips if c.split == TEST]
+    windows = WindowConfig(seconds=model.window_frames / 30, stride_seconds=train_config.window_stride_seconds)
+    train_data = windows_to_tensors(train_clips, windows, prompt_kind)
+    validation = windows_to_tensors(test_clips, WindowConfig(seconds=5, stride_seconds=2.5), prompt_kind) if test_clips else None
+    return train(model, train_config, train_data, validation, out_dir, resume=resume, progress=progress)
+
+
+def build_generator(checkpoint: str | Path, **options):
+    from .generator import SGMDGenerator
+
+    return SGMDGenerator(checkpoint, **options)
+
 
 plugin = GeneratorPlugin(
     name="sgmd",
     summary="style-guided transformer motion diffusion (choreo generate / inbetween / inpaint / trajectory)",
     ready=False,
-    status="placeholder: model, training and default weights not implemented yet (SGMD generator issue)",
+    status="in progress: model, samplers and training exist; the default checkpoint is not trained yet (SGMD issue)",
+    factory=build_generator,
+    train=train_from_dataset,
 )

@@ -6,6 +6,7 @@ import typer
 
 from . import commands
 from .eval_command import evaluate
+from .train_command import train
 
 app = typer.Typer(
     name="choreo",
@@ -22,3 +23,4 @@ app.command("convert")(commands.convert)
 app.command("generators")(commands.generators)
 app.command("prepare")(commands.prepare)
 app.command("eval")(evaluate)
+app.command("train")(train)

@@ -43,3 +43,4 @@ class GeneratorPlugin:
     ready: bool  # False while the backend is a placeholder
     status: str = ""  # shown when not ready: what is missing and where it is tracked
     factory: Callable[..., Generator] | None = None  # builds a Generator (e.g. from a checkpoint)
+    train: Callable[..., object] | None = None  # train(data_dir, out_dir, **options), for `choreo train NAME`

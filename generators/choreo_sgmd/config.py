@@ -1,0 +1,83 @@
+"""Configurations of the SGMD backend: frozen dataclasses, stored in checkpoints as plain dicts."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+
+from choreo.motion import FRAME_DIM
+from choreo.music import FEATURE_DIM
+
+STYLE_MODES = ("modulation", "concat", "none")  # paper's Style Modulation, its concat ablation, EDGE
+PROMPT_KINDS = ("description", "name", "onehot")  # the paper's three kinds of style prompt
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    frame_dim: int = FRAME_DIM  # 4 contacts | 3 root | 24 x 6D
+    music_dim: int = FEATURE_DIM  # the 35-d librosa features
+    style_dim: int = 384  # all-MiniLM-L6-v2 sentence embeddings; the number of genres for one-hot
+    latent_dim: int = 512
+    ff_dim: int = 1024
+    num_layers: int = 8  # decoder layers
+    num_heads: int = 8
+    music_layers: int = 2  # music encoder layers
+    dropout: float = 0.1
+    style_mode: str = "modulation"
+    window_frames: int = 150  # 5 s at 30 fps
+
+    def __post_init__(self):
+        if self.style_mode not in STYLE_MODES:
+            raise ValueError(f"style_mode must be one of {STYLE_MODES}, got {self.style_mode!r}")
+        if self.latent_dim % self.num_heads or (self.latent_dim // self.num_heads) % 2:
+            raise ValueError("latent_dim / num_heads must be an even integer (rotary embeddings)")
+
+
+@dataclass(frozen=True)
+class DiffusionConfig:
+    timesteps: int = 1000
+    cosine_offset: float = 0.008  # s in Nichol & Dhariwal's cosine schedule
+    max_beta: float = 0.999
+    music_dropout: float = 0.25  # classifier-free guidance: music replaced by a learned null
+    style_dropout: float = 0.1  # so the model can also dance with no style given
+    # Loss weights (EDGE's defaults): x0 reconstruction, velocity, FK joint positions, foot contact.
+    reconstruction_weight: float = 0.636
+    velocity_weight: float = 2.964
+    joint_weight: float = 0.646
+    foot_weight: float = 10.942
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    batch_size: int = 32
+    learning_rate: float = 4e-4
+    weight_decay: float = 0.02
+    ema_decay: float = 0.999
+    max_steps: int = 20_000
+    window_stride_seconds: float = 0.5
+    validation_every: int = 500
+    checkpoint_every: int = 500
+    seed: int = 0
+    prompt_kind: str = "description"
+    num_threads: int = 0  # 0: torch's default
+
+    def __post_init__(self):
+        if self.prompt_kind not in PROMPT_KINDS:
+            raise ValueError(f"prompt_kind must be one of {PROMPT_KINDS}, got {self.prompt_kind!r}")
+
+
+PRESETS: dict[str, ModelConfig] = {
+    "paper": ModelConfig(),  # latent 512, 8 decoder layers, 8 heads: ~50 M parameters
+    "small": ModelConfig(latent_dim=256, ff_dim=512, num_layers=4, num_heads=4, music_layers=1),
+    "cpu": ModelConfig(latent_dim=128, ff_dim=256, num_layers=4, num_heads=4, music_layers=1),
+    "tiny": ModelConfig(latent_dim=32, ff_dim=64, num_layers=2, num_heads=2, music_layers=1, dropout=0.0),
+}
+
+
+def model_config(name: str, **overrides) -> ModelConfig:
+    if name not in PRESETS:
+        raise ValueError(f"unknown model configuration {name!r} (known: {', '.join(PRESETS)})")
+    return replace(PRESETS[name], **overrides)
+
+
+def to_dict(config) -> dict:
+    return asdict(config)

