@@ -6,6 +6,7 @@ import typer
 
 from . import commands
 from .eval_command import evaluate
+from .generate_command import generate
 from .train_command import train
 
 app = typer.Typer(
@@ -18,6 +19,7 @@ app = typer.Typer(
     rich_markup_mode="rich",
 )
 
+app.command("generate")(generate)
 app.command("info")(commands.info)
 app.command("convert")(commands.convert)
 app.command("generators")(commands.generators)
