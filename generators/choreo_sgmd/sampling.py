@@ -98,3 +98,17 @@ class _StyleMask:
     def __call__(self, x_t, t, music, style, keep_music=None):
         keep_style = self.keep_style.repeat(len(x_t) // len(self.keep_style))
         return self.model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style)
+
+
+@torch.no_grad()
+def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styles: torch.Tensor,
+                       keep_style: torch.Tensor, frame_dim: int, options: SamplingOptions) -> torch.Tensor:
+    """Normalised x0 (N, W, frame_dim) for N unrelated windows (N, W, 35): how papers score 5 s clips."""
+    generator = torch.Generator().manual_seed(options.seed)
+    x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
+    sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
+    for t in sampler.timesteps.tolist():
+        predictions = [guided_x0(_StyleMask(model, keep_style[part]), x[part], t, music[part], styles[part], options.guidance)
+                       for part in (slice(i, i + options.chunk_windows) for i in range(0, len(x), options.chunk_windows))]
+        x = sampler.step(torch.cat(predictions), t, x, generator).prev_sample
+    return x
