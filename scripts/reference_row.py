@@ -48,7 +48,7 @@ def main() -> None:
         warnings.simplefilter("ignore", MetricWarning)
         report = evaluate(test, train, fps=WINDOWS.fps)
         train_self = evaluate(train, train, fps=WINDOWS.fps)
-    print(f"| set | clips | BeatAlign | PFC | FID_k | FID_g | Div_k | Div_g | beat dist motion->music | music->motion |")
+    print("| set | clips | BeatAlign | PFC | FID_k | FID_g | Div_k | Div_g | beat dist motion->music | music->motion |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     print(f"| M2D test (ground truth motion) | {report.generated_count} | {fmt(report.beat_align)} | {fmt(report.pfc)} | "
           f"{fmt(report.fid_k)} | {fmt(report.fid_g)} | {fmt(report.div_k)} | {fmt(report.div_g)} | "

@@ -14,7 +14,7 @@ from choreo.errors import ChoreoError, InputError, MotionFormatError, OutputErro
 from choreo.formats import parse_bvh, read_joint_positions, read_motion, write_motion
 from choreo.formats.bvh import write_bvh
 from choreo.motion import Motion
-from choreo.skeleton import SMPL24, axis_angle_to_matrix, euler_to_matrix, matrix_to_euler
+from choreo.skeleton import SMPL24, euler_to_matrix, matrix_to_euler
 
 TOLERANCE = 1e-4  # 0.1 mm
 

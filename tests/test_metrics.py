@@ -157,7 +157,7 @@ def test_fid_is_finite_with_few_samples_and_warns():
 
 
 def test_beat_align_is_one_when_speed_minima_sit_on_the_beats():
-    fps, beat_every = 30, 15  # a beat every 0.5 s
+    beat_every = 15  # frames: a beat every 0.5 s at 30 fps
     frames = np.arange(300)
     # Speed is lowest exactly on the beats: position = integral of a speed with minima there.
     speed = 1.0 - np.cos(2 * np.pi * frames / beat_every) + 0.05

@@ -1,6 +1,5 @@
 """SGMD backend: model pieces, schedule and samplers, checkpoints, training and long-form sampling."""
 
-import math
 
 import numpy as np
 import pytest
@@ -10,13 +9,13 @@ from choreo.errors import InputError
 from choreo.generator import GenerationRequest
 from choreo.music import Music
 from choreo_sgmd.checkpoint import load_checkpoint, save_checkpoint
-from choreo_sgmd.config import DiffusionConfig, ModelConfig, TrainConfig, model_config
+from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
 from choreo_sgmd.data import WindowTensors
 from choreo_sgmd.losses import diffusion_losses
 from choreo_sgmd.model import Denoiser, RotaryEmbedding, count_parameters
 from choreo_sgmd.normalizer import Normalizer
 from choreo_sgmd.sampling import stitch, window_starts
-from choreo_sgmd.schedule import DDIMSampler, DDPMSampler, NoiseSchedule, guided_x0, make_sampler
+from choreo_sgmd.schedule import DDIMSampler, NoiseSchedule, guided_x0, make_sampler
 
 TINY = model_config("tiny", style_dim=8)
 

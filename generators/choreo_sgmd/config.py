@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 
 from choreo.motion import FRAME_DIM
 from choreo.music import FEATURE_DIM

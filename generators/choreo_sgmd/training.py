@@ -12,7 +12,6 @@ from typing import Callable
 
 import torch
 
-from choreo.datasets import WindowConfig
 
 from .checkpoint import load_checkpoint, save_checkpoint
 from .config import DiffusionConfig, ModelConfig, TrainConfig
