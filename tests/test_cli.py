@@ -11,7 +11,7 @@ from choreo.motion import Motion
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE_SONG = REPO / "examples" / "drum_and_bass_174bpm.wav"
 AISTPP_FIXTURES = REPO / "tests" / "fixtures" / "aistpp"
-COMMANDS = ["info", "convert", "generators", "prepare", "eval", "train", "generate"]
+COMMANDS = ["info", "convert", "generators", "prepare", "eval", "train", "generate", "inbetween", "inpaint", "trajectory"]
 
 
 def run_cli(capsys, *args):

@@ -36,7 +36,7 @@ def test_aistpp_fixtures_load_with_splits_genres_and_aligned_features():
     po = clips["gPO_sBM_cAll_d10_mPO1_ch02"]
     assert po.genre == "pop" and po.split == "train" and po.motion.fps == 30.0
     assert po.motion.num_frames == 180 and po.features.shape == (180, FEATURE_DIM)  # 6 s at 30 fps
-    assert clips["gWA_sFM_cAll_d25_mWA2_ch03"].split == "train"  # val counts as train
+    assert clips["gWA_sFM_cAll_d25_mWA2_ch03"].split == "val"  # kept apart, as EDGE leaves it out
     assert clips["gHO_sBM_cAll_d19_mHO3_ch04"].split == "test"
     # smpl_trans / smpl_scaling is metres: the root hovers about 0.9 m up.
     assert np.median(po.motion.root_positions[:, 1]) == pytest.approx(0.9, abs=0.05)

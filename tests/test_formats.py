@@ -197,6 +197,54 @@ def test_aistpp_pickle_is_read_safely(tmp_path):
         read_motion(tmp_path / "evil.pkl")
 
 
+def test_numpy_pickles_are_rebuilt_exactly(tmp_path):
+    from choreo.formats.safe_pickle import load_numpy_pickle
+
+    value = {"c": np.arange(12.0).reshape(3, 4), "f": np.asfortranarray(np.arange(6, dtype="<i4").reshape(2, 3)),
+             "big": np.arange(5, dtype=">f4"), "scalar": np.float64(1.5), "flag": np.bool_(True), "list": [1, "x"]}
+    for protocol in (2, 4, 5):
+        (tmp_path / "a.pkl").write_bytes(pickle.dumps(value, protocol=protocol))
+        back = load_numpy_pickle(tmp_path / "a.pkl")
+        for key in ("c", "f", "big"):
+            np.testing.assert_array_equal(back[key], value[key])
+            assert back[key].dtype == value[key].dtype
+        assert back["scalar"] == 1.5 and back["flag"] and back["list"] == [1, "x"]
+
+
+class _HugeArray:
+    """Pickles as an ndarray that claims 10^12 float64s but carries 8 bytes."""
+
+    def __reduce__(self):
+        from numpy._core.multiarray import _reconstruct
+
+        return _reconstruct, (np.ndarray, (0,), b"b"), (1, (10**12,), np.dtype("f8"), False, b"\0" * 8)
+
+
+@pytest.mark.parametrize("case, message", [
+    (b"\x80\x02}r\xff\xff\xff\x7f.", "memo index"),  # one opcode that would grow the memo to 16 GiB
+    (pickle.dumps({"smpl_poses": _HugeArray()}, protocol=2), "does not match its 8 bytes"),
+    (pickle.dumps({"smpl_poses": np.zeros(2, dtype=[("a", "f8")])}, protocol=2), "not a plain numeric type"),
+    (pickle.dumps({"smpl_poses": np.array([1, None], dtype=object)}, protocol=2), "not a plain numeric type"),
+    (pickle.dumps({"smpl_poses": __import__("os").getcwd}, protocol=2), "refusing to load"),
+])  # fmt: skip
+def test_crafted_pickles_are_refused_before_numpy_sees_them(tmp_path, case, message):
+    (tmp_path / "bad.pkl").write_bytes(case)
+    with pytest.raises(MotionFormatError, match=message):
+        read_motion(tmp_path / "bad.pkl")
+
+
+def test_dtype_state_is_never_passed_to_numpy(tmp_path):
+    """A structured dtype state smuggled behind a plain type code (numpy itself may crash on these)."""
+    data = pickle.dumps(np.zeros(3), protocol=2)
+    crafted = data.replace(b"NNNJ", b"N(X\x01\x00\x00\x00atNJ", 1)  # names=('a',) instead of None
+    assert crafted != data
+    (tmp_path / "bad.pkl").write_bytes(crafted)
+    from choreo.formats.safe_pickle import UnsafePickle, load_numpy_pickle
+
+    with pytest.raises(UnsafePickle, match="structured"):
+        load_numpy_pickle(tmp_path / "bad.pkl")
+
+
 def test_joint_positions_from_every_format(tmp_path):
     motion = random_motion()
     expected = motion.joint_positions()

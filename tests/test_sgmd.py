@@ -210,6 +210,8 @@ def test_style_prompts_of_every_kind():
     with pytest.raises(ParameterError):
         resolve_style("99", "onehot")
     assert not np.allclose(resolve_style("waltz", "name").vector, waltz.vector)  # name vs description
+    salsa = resolve_style("Salsa", "description")  # a related dance: no encoder, a notice
+    assert salsa.genre == "cha-cha" and "closest genre" in salsa.notice
 
 
 def test_free_text_and_unknown_words_use_the_bundled_encoder():
@@ -218,5 +220,78 @@ def test_free_text_and_unknown_words_use_the_bundled_encoder():
 
     free = resolve_style("slow, romantic, hips leading", "description")
     assert free.genre is None and free.vector.shape == (384,) and abs(np.linalg.norm(free.vector) - 1) < 1e-4
-    fallback = resolve_style("ballet", "description")
+    fallback = resolve_style("balletic", "description")
     assert fallback.genre == "ballet jazz" and "nearest genre" in fallback.notice
+
+
+def run_cli(capsys, *args):
+    from choreo.cli import main
+
+    code = main(list(map(str, args)))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+EXAMPLE_SONG = __import__("pathlib").Path(__file__).resolve().parents[1] / "examples" / "drum_and_bass_174bpm.wav"
+
+
+def test_generate_writes_several_formats_deterministically(tiny_checkpoint, tmp_path, capsys):
+    from choreo.formats import read_motion
+
+    args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3", "--seed", "5"]
+    code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "a.bvh", "-o", tmp_path / "a.npz")
+    assert code == 0, err
+    assert "wrote" in err and "waltz" in err and "3 steps" in err
+    bvh, npz = read_motion(tmp_path / "a.bvh"), read_motion(tmp_path / "a.npz")
+    assert bvh.num_frames == npz.num_frames == Music.from_file(EXAMPLE_SONG).num_frames
+    assert npz.metadata["seed"] == 5 and npz.metadata["genre"] == "waltz"
+    np.testing.assert_allclose(bvh.joint_positions(), npz.joint_positions(), atol=1e-4)
+    code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "b.bvh", "-o", tmp_path / "b.npz")
+    assert code == 0, err
+    for ext in ("bvh", "npz"):  # same inputs and seed: the same bytes
+        assert (tmp_path / f"a.{ext}").read_bytes() == (tmp_path / f"b.{ext}").read_bytes()
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--sampler", "euler"], "unknown sampler"),
+    (["--steps", "0"], "steps >= 1"),
+    (["--checkpoint", "missing.pt"], "does not exist"),
+])  # fmt: skip
+def test_generate_refuses_bad_options_in_one_line(tiny_checkpoint, tmp_path, capsys, extra, message):
+    options = ["--checkpoint", tiny_checkpoint] if "--checkpoint" not in extra else []
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "a.bvh", *options, *extra)
+    assert code != 0 and message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "a.bvh").exists()
+
+
+def test_inference_checkpoint_is_small_and_generates_the_same(tiny_checkpoint, tmp_path):
+    from choreo_sgmd.checkpoint import export_for_inference
+    from choreo_sgmd.generator import SGMDGenerator
+
+    export_for_inference(tiny_checkpoint, tmp_path / "slim.pt")
+    assert (tmp_path / "slim.pt").stat().st_size < 0.5 * tiny_checkpoint.stat().st_size
+    state = load_checkpoint(tmp_path / "slim.pt")
+    assert "optimizer" not in state and "state_dict" not in state
+    music = Music.from_array(np.zeros(22050 * 6, np.float32) + 0.01, 22050)
+    request = GenerationRequest(music, style="rumba", seed=1, options={"steps": 2})
+    a = SGMDGenerator(tiny_checkpoint).generate(request)
+    b = SGMDGenerator(tmp_path / "slim.pt").generate(request)
+    np.testing.assert_array_equal(a.rotations, b.rotations)
+
+
+def test_batch_generation_reports_bad_songs_and_goes_on(tiny_checkpoint, tmp_path, capsys):
+    import json
+
+    (tmp_path / "broken.mp3").write_bytes(b"not audio at all")
+    out = tmp_path / "out"
+    out.mkdir()
+    code, stdout, err = run_cli(capsys, "generate", EXAMPLE_SONG, tmp_path / "broken.mp3", "--out-dir", out,
+                                "--format", "bvh,npz", "--checkpoint", tiny_checkpoint, "--steps", "2", "--json")
+    assert code == 1
+    summary = json.loads(stdout)
+    assert summary["failed"] == 1 and [s["ok"] for s in summary["songs"]] == [True, False]
+    assert sorted(p.name for p in out.iterdir()) == ["drum_and_bass_174bpm.bvh", "drum_and_bass_174bpm.npz"]
+    assert "broken.mp3" in err and err.strip().splitlines()[-1] == "choreo: error: 1 of 2 songs failed"
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, EXAMPLE_SONG, "-o", tmp_path / "x.bvh",
+                           "--checkpoint", tiny_checkpoint)
+    assert code == 2 and "--out-dir" in err

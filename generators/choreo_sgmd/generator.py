@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
 import torch
 
+from choreo.constraints import Constraints, parse_style_schedule
 from choreo.errors import ParameterError
 from choreo.generator import GenerationRequest, Generator
 from choreo.motion import Motion, vector_to_motion
@@ -16,7 +18,7 @@ from .config import DiffusionConfig, ModelConfig
 from .data import MusicScaler
 from .model import Denoiser
 from .normalizer import Normalizer
-from .sampling import SamplingOptions, sample_long
+from .sampling import Inpainting, SamplingOptions, sample_long
 from .schedule import NoiseSchedule
 from .style import resolve_style
 
@@ -31,6 +33,8 @@ class SGMDGenerator(Generator):
         self.diffusion_config = DiffusionConfig(**state["diffusion_config"])
         self.prompt_kind = state["prompt_kind"]
         self.model = Denoiser(self.model_config).eval()
+        if not use_ema and "state_dict" not in state:
+            raise ParameterError(f"{checkpoint} holds EMA weights only (an inference checkpoint)")
         self.model.load_state_dict(state["ema_state_dict" if use_ema else "state_dict"])
         self.normalizer = Normalizer.from_state_dict(state["normalizer"])
         self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
@@ -40,18 +44,60 @@ class SGMDGenerator(Generator):
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
         options = SamplingOptions(**{k: v for k, v in request.options.items() if k in SamplingOptions.__dataclass_fields__})
         if request.seed is not None:
-            options = SamplingOptions(**{**options.__dict__, "seed": request.seed})
+            options = replace(options, seed=request.seed)
         if options.guidance < 0 or options.steps < 1:
             raise ParameterError("guidance must be >= 0 and steps >= 1")
-        style = resolve_style(request.style, self.prompt_kind)
-        style_vector = torch.zeros(1, self.model_config.style_dim) if style.vector is None else torch.from_numpy(style.vector)[None].float()
+        if options.sampler not in ("ddim", "ddpm"):
+            raise ParameterError(f"unknown sampler {options.sampler!r} (use ddim or ddpm)")
+        if options.sampler == "ddpm" and request.options.get("steps") is None:
+            options = replace(options, steps=self.diffusion_config.timesteps)
+
+        num_frames = request.music.num_frames
+        style, keep_style, genres, notices = self.style_conditioning(request.style, num_frames, request.music.fps)
+        inpainting, known = self.inpainting(request.constraints, num_frames)
         music = self.music_scaler(torch.from_numpy(request.music.features).float())
-        x0, evaluations = sample_long(self.model, self.schedule, music, style_vector, style.vector is not None,
-                                      self.model_config.frame_dim, self.model_config.window_frames, options, progress)
-        motion, _ = vector_to_motion(self.normalizer.denormalize(x0).numpy(), fps=request.music.fps)
+        x0, evaluations = sample_long(self.model, self.schedule, music, style, keep_style, self.model_config.frame_dim,
+                                      self.model_config.window_frames, options, progress, inpainting)
+        vectors = self.normalizer.denormalize(x0).numpy()
+        if known is not None:  # exact, not merely within float32 normalisation error
+            values, mask = known
+            vectors[mask] = values[mask]
+        motion, _ = vector_to_motion(vectors, fps=request.music.fps)
         motion.metadata = {
-            "generator": "sgmd", "checkpoint": self.checkpoint.name, "style": request.style, "genre": style.genre,
-            "style_notice": style.notice, "seed": options.seed, "steps": options.steps, "guidance": options.guidance,
-            "sampler": options.sampler, "network_evaluations": evaluations,
+            "generator": "sgmd", "checkpoint": self.checkpoint.name, "style": request.style,
+            "genre": genres[0] if len(genres) == 1 else (",".join(g or "free text" for g in genres) or None),
+            "style_notice": "; ".join(notices) or None, "seed": options.seed, "steps": options.steps,
+            "guidance": options.guidance, "sampler": options.sampler, "network_evaluations": evaluations,
+            "trained_steps": self.trained_steps,
+            "constrained_fraction": None if request.constraints is None else round(request.constraints.known_fraction(), 4),
         }  # fmt: skip
         return motion
+
+    def style_conditioning(self, prompt: str | None, num_frames: int, fps: float):
+        """(style (1 or T, S), keep (bool or (T,)), genres, notices) for a prompt or a time schedule."""
+        schedule = parse_style_schedule(prompt, num_frames / fps) if prompt else None
+        if schedule is None:
+            style = resolve_style(prompt, self.prompt_kind)
+            vector = torch.zeros(1, self.model_config.style_dim) if style.vector is None else torch.from_numpy(style.vector)[None].float()
+            return vector, style.vector is not None, [style.genre], [style.notice] if style.notice else []
+        per_frame = torch.zeros(num_frames, self.model_config.style_dim)
+        keep = torch.zeros(num_frames, dtype=torch.bool)
+        genres, notices = [], []
+        for start, stop, text in schedule:
+            style = resolve_style(text, self.prompt_kind)
+            frames = slice(round(start * fps), num_frames if stop is None else round(stop * fps))
+            if style.vector is not None:
+                per_frame[frames] = torch.from_numpy(style.vector).float()
+                keep[frames] = True
+            genres.append(style.genre)
+            notices += [style.notice] if style.notice else []
+        return per_frame, keep, genres, notices
+
+    def inpainting(self, constraints: Constraints | None, num_frames: int):
+        if constraints is None or constraints.is_empty:
+            return None, None
+        if constraints.num_frames != num_frames:
+            raise ParameterError(f"constraints cover {constraints.num_frames} frames, the song {num_frames}")
+        values, mask = constraints.frame_vectors()
+        normalised = self.normalizer.normalize(torch.from_numpy(values).float())
+        return Inpainting(normalised, torch.from_numpy(mask)), (values, mask)

@@ -59,19 +59,62 @@ def stitch(windows: torch.Tensor, num_frames: int) -> torch.Tensor:
     return torch.cat(out)[:num_frames]
 
 
+@dataclass
+class Inpainting:
+    """Known normalised frame values (T, D) and their mask (T, D): paper eqs. 8-10.
+
+    After every step the known channels are replaced by the known values noised to the step's
+    level; after the last step by the known values themselves, so constrained frames come out
+    exactly as given (EDGE skips that final re-imposition).
+    """
+
+    values: torch.Tensor
+    mask: torch.Tensor
+
+    def windows(self, starts: list[int], window: int) -> "Inpainting":
+        return Inpainting(windowed(self.values, starts, window), windowed(self.mask.float(), starts, window) > 0.5)
+
+    def impose(self, x: torch.Tensor, schedule: NoiseSchedule, t_prev: int, generator: torch.Generator) -> torch.Tensor:
+        if t_prev < 0:
+            return torch.where(self.mask, self.values, x)
+        noise = torch.randn(x.shape, generator=generator, dtype=x.dtype)
+        noised = schedule.q_sample(self.values, torch.full((len(x),), t_prev), noise)
+        return torch.where(self.mask, noised, x)
+
+
+def window_styles(style: torch.Tensor, keep_style: torch.Tensor | bool, starts: list[int], window: int,
+                  num_frames: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """Per-window style vectors: one vector for the song, or the mean over each window of a
+    per-frame schedule (T, S), which blends neighbouring styles where a window straddles a border."""
+    count = len(starts)
+    if style.shape[0] == 1:
+        keep = keep_style if isinstance(keep_style, torch.Tensor) else torch.tensor([keep_style])
+        return style.expand(count, -1), keep.expand(count)
+    per_frame_keep = keep_style.float()[:, None] if isinstance(keep_style, torch.Tensor) else torch.ones(num_frames, 1)
+    styles = windowed(style * per_frame_keep, starts, window)
+    weights = windowed(per_frame_keep, starts, window)
+    total = weights.sum(1)
+    return styles.sum(1) / total.clamp(min=1), total[:, 0] > 0
+
+
 @torch.no_grad()
-def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torch.Tensor, keep_style: bool,
+def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torch.Tensor, keep_style,
                 frame_dim: int, window: int, options: SamplingOptions,
-                progress: Callable[[float], None] | None = None) -> tuple[torch.Tensor, int]:
-    """Normalised x0 (T, frame_dim) for standardised music (T, 35); returns it and the network evaluations."""
+                progress: Callable[[float], None] | None = None,
+                inpainting: Inpainting | None = None) -> tuple[torch.Tensor, int]:
+    """Normalised x0 (T, frame_dim) for standardised music (T, 35), and the network evaluations per window.
+
+    ``style`` is (1, S) for the whole song or (T, S) per frame (a style schedule); ``keep_style``
+    a bool or (T,) bools saying where a style is given at all.
+    """
     num_frames = len(music)
     starts = window_starts(num_frames, window)
     music_windows = windowed(music, starts, window)
     count, hop = len(starts), window // 2
     generator = torch.Generator().manual_seed(options.seed)
     x = torch.randn((count, window, frame_dim), generator=generator)
-    styles = style.expand(count, -1)
-    keep = torch.full((count,), keep_style, dtype=torch.bool)
+    styles, keep = window_styles(style, keep_style, starts, window, num_frames)
+    known = inpainting.windows(starts, window) if inpainting is not None else None
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
@@ -80,8 +123,10 @@ def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torc
             part = slice(first, first + options.chunk_windows)
             predictions.append(guided_x0(_StyleMask(model, keep[part]), x[part], t, music_windows[part], styles[part],
                                          options.guidance))
-            evaluations += 1 if options.guidance == 1.0 else 2
+        evaluations += 1 if options.guidance == 1.0 else 2  # per window: the cost unit of diffusion samplers
         x = sampler.step(torch.cat(predictions), t, x, generator).prev_sample
+        if known is not None:
+            x = known.impose(x, schedule, sampler.previous(t), generator)
         if i + 1 < len(sampler.timesteps):  # the final x0s are cross-faded by stitch() instead
             x[1:, :hop] = x[:-1, window - hop:]
         if progress:

@@ -43,6 +43,15 @@ ALIASES = {"chacha": "cha-cha", "cha cha": "cha-cha", "chachacha": "cha-cha", "c
            "breaking": "break", "breakdance": "break", "popping": "pop", "locking": "lock", "waacking": "waack",
            "krumping": "krump", "hip-hop": "middle hip-hop", "hiphop": "middle hip-hop", "hip hop": "middle hip-hop",
            "la hip-hop": "LA-style hip-hop", "jazz": "street jazz", "viennese waltz": "waltz"}  # fmt: skip
+# Dances we have no data for, mapped by how they move (family, tempo, footwork) rather than by how
+# their names embed: MiniLM puts "salsa" nearest to waltz, a dancer would say cha-cha.
+RELATED = {"salsa": "cha-cha", "mambo": "cha-cha", "bachata": "rumba", "bolero": "rumba", "samba": "cha-cha",
+           "merengue": "cha-cha", "jive": "cha-cha", "paso doble": "tango", "argentine tango": "tango",
+           "milonga": "tango", "foxtrot": "waltz", "quickstep": "waltz", "slow foxtrot": "waltz",
+           "disco": "waack", "voguing": "waack", "vogue": "waack", "breakin": "break", "b-boying": "break",
+           "robot": "pop", "tutting": "pop", "funk": "lock", "clowning": "krump", "jazz funk": "street jazz",
+           "contemporary": "ballet jazz", "ballet": "ballet jazz", "lyrical": "ballet jazz",
+           "shuffle": "house", "techno": "house", "trap": "LA-style hip-hop"}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -128,6 +137,9 @@ def resolve_style(prompt: str | None, kind: str) -> Style:
     genre = canonical_genre(text)
     if genre is not None:
         return Style(genre_vector(genre, kind), genre)
+    related = RELATED.get(re.sub(r"\s+", " ", text.lower()))
+    if related is not None:
+        return Style(genre_vector(related, kind), related, f"no {text!r} in the training data: dancing the closest genre, {related}")
     if len(text.split()) == 1 or kind == "onehot":
         genre = nearest_genre(text)
         return Style(genre_vector(genre, kind), genre, f"unknown style {text!r}: using the nearest genre, {genre}")

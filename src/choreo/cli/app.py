@@ -6,7 +6,7 @@ import typer
 
 from . import commands
 from .eval_command import evaluate
-from .generate_command import generate
+from .generate_command import generate, inbetween, inpaint, trajectory
 from .train_command import train
 
 app = typer.Typer(
@@ -20,6 +20,9 @@ app = typer.Typer(
 )
 
 app.command("generate")(generate)
+app.command("inbetween")(inbetween)
+app.command("inpaint")(inpaint)
+app.command("trajectory")(trajectory)
 app.command("info")(commands.info)
 app.command("convert")(commands.convert)
 app.command("generators")(commands.generators)

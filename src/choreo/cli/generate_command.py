@@ -1,56 +1,262 @@
-"""`choreo generate`: music in, dance out, through a generator backend."""
+"""`choreo generate` and the controllable commands built on it: inbetween, inpaint, trajectory.
+
+All four share one pipeline (analyse the song, build constraints against its frames, dance,
+write every output atomically) and one set of sampling options.
+"""
 
 from __future__ import annotations
 
+import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional
+from typing import Callable, List, Optional
 
 import typer
 
 from .progress import progress_bar, stderr_console
 
+SONG = typer.Argument(..., help="Audio file: wav, mp3, ogg, flac or opus.")
+OUTPUT = typer.Option(..., "-o", "--output",
+                      help="Output motion file (.bvh, .npz, .json, .npy) or - for stdout; repeat for several.")
+STYLE = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text, or a schedule 0:30=waltz,30:=cha-cha.")
+CHECKPOINT = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one.")
+GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
+STEPS = typer.Option(None, help="Sampling steps (default: the backend's; see docs/sgmd.md).")
+GUIDANCE = typer.Option(2.0, help="Classifier-free guidance weight on the music (1 = none).")
+SAMPLER = typer.Option("ddim", help="ddim (fast, any number of steps) or ddpm (the full chain).")
+SEED = typer.Option(0, help="Random seed: same seed, same dance.")
+FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
+
 
 def generate(
-    song: Path = typer.Argument(..., help="Audio file: wav, mp3, ogg, flac or opus."),
-    output: str = typer.Option(..., "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy) or - for stdout."),
-    style: Optional[str] = typer.Option(None, help="Genre (waltz, rumba, ...), its index, or a free-text description."),
-    checkpoint: Optional[Path] = typer.Option(None, help="Trained checkpoint (from choreo train)."),
-    generator: str = typer.Option("sgmd", help="Backend (see choreo generators)."),
-    steps: int = typer.Option(50, help="Sampling steps (DDIM)."),
-    guidance: float = typer.Option(2.0, help="Classifier-free guidance weight on the music."),
-    seed: int = typer.Option(0, help="Random seed: same seed, same dance."),
-    format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
+    songs: List[Path] = typer.Argument(..., help="Audio files: wav, mp3, ogg, flac or opus (several with --out-dir)."),
+    output: Optional[List[str]] = typer.Option(
+        None, "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy) or - for stdout; repeat for several."),
+    out_dir: Optional[Path] = typer.Option(None, help="Folder for one dance per song, named after the song (batch mode)."),
+    style: Optional[str] = STYLE,
+    seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it."),
+    checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR, steps: Optional[int] = STEPS,
+    guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    format: Optional[str] = typer.Option(None, "--format", "-f",
+                                         help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
+    json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
 ) -> None:
-    """Generate a dance for a song.
+    """Generate a dance for a song, or for many songs in one run.
+
+    Exit codes: 0 every song danced; 1 some songs failed in a batch (each reported, the rest done);
+    2 bad input or options; 3 an output cannot be written.
 
     Examples:
-      choreo generate song.mp3 -o dance.bvh --style waltz --checkpoint runs/sgmd/last.pt
-      choreo generate song.mp3 -o dance.npz --style "slow, romantic, hips leading" --checkpoint last.pt --seed 7
+      choreo generate song.mp3 -o dance.bvh --style waltz
+      choreo generate song.mp3 -o dance.bvh -o dance.npz --style "slow, romantic, hips leading" --seed 7
+      choreo generate song.mp3 -o dance.bvh --style 0:30=waltz,30:=cha-cha --seed-motion opening.bvh
+      choreo generate songs/*.mp3 --out-dir out/ --format bvh,npz --json
     """
+    import json
+
+    from ..errors import ChoreoError, ParameterError
+
+    if (output is None) == (out_dir is None):
+        raise ParameterError("give either -o (one song) or --out-dir (any number of songs)")
+    if output is not None and len(songs) > 1:
+        raise ParameterError(f"{len(songs)} songs need --out-dir, not -o")
+    if out_dir is not None:
+        formats = [f.strip().lower().lstrip(".") for f in (format or "bvh").split(",") if f.strip()]
+        if not out_dir.is_dir():
+            raise ParameterError(f"--out-dir {out_dir} is not a folder")
+
+    def outputs_for(song: Path) -> list[str]:
+        return list(output) if output is not None else [str(out_dir / f"{song.stem}.{ext}") for ext in formats]
+
+    def constraints(music):
+        from ..constraints import Constraints
+        from ..formats import read_motion
+
+        if seed_motion is None:
+            return None
+        opening = read_motion(seed_motion)
+        opening = opening.resample(music.fps) if abs(opening.fps - music.fps) > 1e-6 else opening
+        return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
+
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None)
+    backend = load_backend(settings)
+    summaries, failed = [], 0
+    for song in songs:
+        try:
+            summaries.append(dance_one(backend, song, outputs_for(song), settings, constraints))
+        except ChoreoError as error:
+            if len(songs) == 1:
+                raise
+            failed += 1
+            stderr_console.print(f"[red]failed[/red] {song}: {error}", highlight=False)
+            summaries.append({"song": str(song), "ok": False, "error": str(error), "exit_code": error.exit_code})
+    if json_summary:
+        print(json.dumps({"songs": summaries, "failed": failed}, indent=2))
+    if failed:
+        raise ChoreoError(f"{failed} of {len(songs)} songs failed")  # exit code 1
+
+
+def inbetween(
+    song: Path = SONG, output: List[str] = OUTPUT,
+    start: Optional[str] = typer.Option(None, help="Pose on the first frame: FILE or FILE@FRAME (any motion file)."),
+    end: Optional[str] = typer.Option(None, help="Pose on the last frame: FILE or FILE@FRAME."),
+    key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
+    style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
+    steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    format: Optional[str] = FORMAT,
+) -> None:
+    """Dance between given poses: the first and last frame and keyframes at given times.
+
+    Examples:
+      choreo inbetween song.mp3 --start a.bvh --end b.bvh -o dance.bvh
+      choreo inbetween song.mp3 --start a.bvh@-1 --key 4.0=pose.bvh --key 8.5=take2.npz@30 -o dance.bvh --style rumba
+    """
+    from ..errors import ParameterError
+
+    if start is None and end is None and not key:
+        raise ParameterError("give at least one of --start, --end or --key")
+
+    def constraints(music):
+        from ..constraints import Constraints, parse_time_key, read_pose
+
+        fixed = Constraints.none(music.num_frames, music.fps)
+        keys = [(0.0, start)] if start else []
+        keys += [parse_time_key(k) for k in key]
+        for seconds, spec in keys:
+            frame = round(seconds * music.fps)
+            if frame >= music.num_frames:
+                raise ParameterError(f"keyframe at {seconds:g} s is past the song's end ({music.duration:.1f} s)")
+            fixed.fix_motion(read_pose(spec), at=frame)
+        if end:
+            fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
+        return fixed
+
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format)
+    dance_one(load_backend(settings), song, output, settings, constraints)
+
+
+def inpaint(
+    song: Path = SONG, output: List[str] = OUTPUT,
+    motion: Path = typer.Option(..., help="The dance to edit (any motion file, e.g. one this tool made)."),
+    frames: Optional[str] = typer.Option(None, help="Frames to regenerate, START:END (end exclusive); default all."),
+    joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
+    style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
+    steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    format: Optional[str] = FORMAT,
+) -> None:
+    """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
+
+    Examples:
+      choreo inpaint song.mp3 --motion dance.bvh --frames 60:120 -o fixed.bvh
+      choreo inpaint song.mp3 --motion dance.bvh --joints upper -o new_arms.bvh --style "sharp, energetic arms"
+    """
+    from ..errors import ParameterError
+
+    def constraints(music):
+        from ..constraints import Constraints, parse_frame_range, parse_joints
+        from ..formats import read_motion
+
+        given = read_motion(motion)
+        given = given.resample(music.fps) if abs(given.fps - music.fps) > 1e-6 else given
+        fixed = Constraints.none(music.num_frames, music.fps).fix_motion(given.slice_frames(0, music.num_frames))
+        region = parse_frame_range(frames, music.num_frames) if frames else slice(0, music.num_frames)
+        chosen = parse_joints(joints)
+        fixed.free(region, chosen, root=0 in chosen)
+        if fixed.is_empty:
+            raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
+        return fixed
+
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format)
+    dance_one(load_backend(settings), song, output, settings, constraints)
+
+
+def trajectory(
+    song: Path = SONG, output: List[str] = OUTPUT,
+    path: Path = typer.Option(..., help="Root path on the floor: CSV (x,z or t,x,z; optional y) or a motion file."),
+    style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
+    steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    format: Optional[str] = FORMAT,
+) -> None:
+    """Dance along a root path on the floor, stretched over the whole song.
+
+    Examples:
+      choreo trajectory song.mp3 --path circle.csv -o dance.bvh --style waltz
+      choreo trajectory song.mp3 --path other_dance.bvh -o dance.bvh
+    """
+    def constraints(music):
+        from ..constraints import Constraints, path_to_frames, read_root_path
+
+        xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
+        return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
+
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format)
+    dance_one(load_backend(settings), song, output, settings, constraints)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """The sampling options every generating command shares."""
+
+    style: str | None
+    checkpoint: Path | None
+    generator: str
+    steps: int | None
+    guidance: float
+    sampler: str
+    seed: int
+    format: str | None
+
+
+def load_backend(settings: Settings):
     from ..errors import ChoreoError
+    from ..generator import available_plugins
+
+    plugin = available_plugins().get(settings.generator)
+    if plugin is None or plugin.factory is None:
+        raise ChoreoError(f"generator {settings.generator!r} is not available")
+    checkpoint = settings.checkpoint
+    if checkpoint is None:
+        checkpoint = plugin.default_checkpoint
+        if checkpoint is None or not Path(checkpoint).is_file():
+            raise ChoreoError(f"{settings.generator} has no bundled checkpoint; pass --checkpoint")
+    return plugin.factory(checkpoint)
+
+
+def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
+    """Analyse one song, build its constraints, dance, write every output atomically; a summary."""
+    from ..errors import ParameterError
     from ..fileio import check_output_dir
     from ..formats import write_motion
-    from ..generator import GenerationRequest, available_plugins
+    from ..generator import GenerationRequest
     from ..music import Music
 
-    plugins = available_plugins()
-    plugin = plugins.get(generator)
-    if plugin is None or plugin.factory is None:
-        raise ChoreoError(f"generator {generator!r} is not available")
-    if checkpoint is None:
-        raise ChoreoError(f"{generator} has no default checkpoint yet ({plugin.status}); pass --checkpoint")
-    if output != "-":
-        check_output_dir(output)
-    backend = plugin.factory(checkpoint)
+    if output.count("-") > 1 or (len(output) > 1 and settings.format):
+        raise ParameterError("with several outputs, name each by its extension (and at most one '-')")
+    for path in output:
+        if path != "-":
+            check_output_dir(path)
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)))
-    request = GenerationRequest(music, style=style, seed=seed, options={"steps": steps, "guidance": guidance})
+    constraints = build_constraints(music) if build_constraints else None
+    options = {"guidance": settings.guidance, "sampler": settings.sampler}
+    options |= {} if settings.steps is None else {"steps": settings.steps}
+    request = GenerationRequest(music, style=settings.style, seed=settings.seed, options=options, constraints=constraints)
+    started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
         motion = backend.generate(request, progress=lambda fraction: update(round(fraction * 100), 100))
-    notice = motion.metadata.get("style_notice")
-    if notice:
-        stderr_console.print(f"[yellow]note:[/yellow] {notice}")
-    write_motion(motion, output, format=format)
-    if output != "-":
-        stderr_console.print(f"wrote {output}: {motion.duration:.1f} s of {motion.metadata.get('genre') or 'dance'} "
-                             f"at {motion.fps:g} fps ({generator}, {steps} steps, guidance {guidance:g}, seed {seed})")
+    seconds = time.perf_counter() - started
+    meta = motion.metadata
+    if meta.get("style_notice"):
+        stderr_console.print(f"[yellow]note:[/yellow] {meta['style_notice']}")
+    for path in output:
+        write_motion(motion, path, format=settings.format)
+    written = [path for path in output if path != "-"]
+    if written:
+        kept = f", {100 * constraints.known_fraction():.0f} % of joint values given" if constraints else ""
+        stderr_console.print(
+            f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at {motion.fps:g} fps "
+            f"({settings.generator}, {meta.get('sampler')} {meta.get('steps')} steps, guidance {settings.guidance:g}, "
+            f"seed {settings.seed}{kept}; {seconds:.1f} s)", highlight=False)
+    return {"song": str(song), "ok": True, "outputs": written, "seconds_of_dance": round(motion.duration, 3),
+            "frames": motion.num_frames, "fps": motion.fps, "genre": meta.get("genre"), "seed": settings.seed,
+            "steps": meta.get("steps"), "generation_seconds": round(seconds, 3)}

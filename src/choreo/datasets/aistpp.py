@@ -41,11 +41,15 @@ def _read_list(path: Path) -> list[str]:
 
 
 def read_splits(root: Path) -> dict[str, str]:
-    """Sequence name -> split; AIST++'s validation list counts as train (as EDGE does)."""
+    """Sequence name -> split: train, test or val.
+
+    Training uses the train list only: EDGE ships just crossmodal_train and crossmodal_test, so its
+    models never see the validation sequences, and ours match it.
+    """
     splits = {}
     for split, filename in SPLIT_FILES.items():
         for name in _read_list(root / "splits" / filename):
-            splits[name] = TRAIN if split == "val" else split
+            splits[name] = split
     return splits
 
 

@@ -2,7 +2,8 @@
 
 Keys: ``smpl_poses`` (N, 72), ``smpl_trans`` (N, 3) in the scaled body's units, ``smpl_scaling``
 (1,) (about 90-100, so trans / scaling is in metres), ``smpl_loss`` (the fit's loss). Pickles can
-run arbitrary code, so we unpickle with a whitelist that allows numpy arrays and nothing else.
+run arbitrary code, so they are read by :mod:`choreo.formats.safe_pickle`, which builds numpy
+arrays itself and accepts nothing else.
 """
 
 from __future__ import annotations
@@ -13,30 +14,17 @@ import numpy as np
 
 from ..errors import MotionFormatError
 from ..motion import Motion
+from .safe_pickle import UnsafePickle, load_numpy_pickle
 from .smpl_params import motion_to_smpl_params, smpl_params_to_motion
 
 AISTPP_FPS = 60.0
-_ALLOWED_GLOBALS = {
-    ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
-    ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
-    ("numpy", "ndarray"), ("numpy", "dtype"), ("_codecs", "encode"),
-}  # fmt: skip
-
-
-class _NumpyOnlyUnpickler(pickle.Unpickler):
-    def find_class(self, module, name):
-        if (module, name) in _ALLOWED_GLOBALS:
-            return super().find_class(module, name)
-        raise pickle.UnpicklingError(f"refusing to load {module}.{name}")
 
 
 def read_aistpp_pkl(path, fps: float = AISTPP_FPS) -> Motion:
     try:
-        with open(path, "rb") as handle:
-            data = _NumpyOnlyUnpickler(handle, encoding="latin1").load()
-    except (pickle.UnpicklingError, EOFError, ValueError, TypeError, AttributeError, IndexError, KeyError,
-            ImportError, MemoryError, OverflowError) as error:
-        raise MotionFormatError(f"{path}: not a readable AIST++ motion pickle ({type(error).__name__})") from None
+        data = load_numpy_pickle(path)
+    except UnsafePickle as error:
+        raise MotionFormatError(f"{path}: not a readable AIST++ motion pickle ({error})") from None
     if not isinstance(data, dict) or "smpl_poses" not in data or "smpl_trans" not in data:
         raise MotionFormatError(f"{path}: pickle lacks the smpl_poses and smpl_trans arrays")
     return smpl_params_to_motion(data["smpl_poses"], data["smpl_trans"], data.get("smpl_scaling"), fps, str(path))

@@ -8,10 +8,12 @@ and the writers do the rest, identically for every backend.
 from __future__ import annotations
 
 import abc
+from pathlib import Path
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable
 
 if TYPE_CHECKING:  # keep `choreo generators` fast: no torch/librosa import for type hints
+    from ..constraints import Constraints
     from ..motion import Motion
     from ..music import Music
 
@@ -22,6 +24,7 @@ class GenerationRequest:
     style: str | None = None  # a genre name, one-hot index or free-text description
     seed: int | None = None
     options: dict[str, Any] = field(default_factory=dict)  # backend-specific, validated by it
+    constraints: "Constraints | None" = None  # known frames/joints/root path (controllable generation)
 
 
 class Generator(abc.ABC):
@@ -44,3 +47,4 @@ class GeneratorPlugin:
     status: str = ""  # shown when not ready: what is missing and where it is tracked
     factory: Callable[..., Generator] | None = None  # builds a Generator (e.g. from a checkpoint)
     train: Callable[..., object] | None = None  # train(data_dir, out_dir, **options), for `choreo train NAME`
+    default_checkpoint: Path | None = None  # shipped weights used when the user names none

@@ -1,0 +1,126 @@
+"""How fast, how big and how good is SGMD generation on this CPU?
+
+    python benchmarks/bench_sgmd.py [--checkpoint PATH] [--steps 5 10 20 50] [--no-quality]
+
+1. Speed: seconds and network evaluations to dance 60 s of music (the example loop tiled to
+   60 s), per number of DDIM steps, with guidance 2, against the 3 s target.
+2. Memory: peak RSS of a whole `choreo generate` run (fresh process, default settings) for a 60 s
+   and a 10 min song, side by side.
+3. Quality against the number of steps: the M2D test windows scored like the reference row, for
+   each step count (skipped without ../shared/data/m2d or with --no-quality).
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import soundfile as sf
+import torch
+
+from choreo.generator import GenerationRequest
+from choreo.music import Music
+from choreo_sgmd import DEFAULT_CHECKPOINT
+from choreo_sgmd.generator import SGMDGenerator
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLE = REPO / "examples" / "drum_and_bass_174bpm.wav"
+TARGET_SECONDS = 3.0
+
+RSS_PROBE = """
+import resource, sys
+from choreo.cli import main
+code = main(["generate", sys.argv[1], "-o", sys.argv[2], "--style", "cha-cha"])
+print(code, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+"""
+
+
+def song_of(seconds: float) -> tuple[np.ndarray, int]:
+    audio, rate = sf.read(EXAMPLE, dtype="float32")
+    repeats = int(np.ceil(seconds * rate / len(audio)))
+    return np.tile(audio, repeats)[: int(seconds * rate)], rate
+
+
+def speed(generator: SGMDGenerator, steps_list: list[int]) -> None:
+    audio, rate = song_of(60.0)
+    started = time.perf_counter()
+    music = Music.from_array(audio, rate)
+    analysis = time.perf_counter() - started
+    print(f"\n## Speed: 60 s of music, {torch.get_num_threads()} threads (music analysis {analysis:.2f} s, "
+          "not included below)\n")
+    print("| sampler | steps | guidance | network evaluations per window | seconds | x 3 s target |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    generator.generate(GenerationRequest(music, style="cha-cha", options={"steps": 2}))  # warm-up
+    for steps in steps_list:
+        for guidance in (1.0, 2.0):
+            started = time.perf_counter()
+            motion = generator.generate(GenerationRequest(music, style="cha-cha", options={"steps": steps, "guidance": guidance}))
+            seconds = time.perf_counter() - started
+            print(f"| DDIM | {steps} | {guidance:g} | {motion.metadata['network_evaluations']} | {seconds:.2f} | "
+                  f"{seconds / TARGET_SECONDS:.2f} |", flush=True)
+
+
+def memory() -> None:
+    print("\n## Peak memory of `choreo generate` (fresh process, default settings)\n")
+    print("| song | peak RSS (MiB) | wall (s) |")
+    print("| --- | ---: | ---: |")
+    with tempfile.TemporaryDirectory() as folder:
+        for seconds in (60.0, 600.0):
+            audio, rate = song_of(seconds)
+            song = Path(folder) / f"song{seconds:.0f}.wav"
+            sf.write(song, audio, rate)
+            started = time.perf_counter()
+            result = subprocess.run([sys.executable, "-c", RSS_PROBE, str(song), str(Path(folder) / "out.npz")],
+                                    capture_output=True, text=True)
+            wall = time.perf_counter() - started
+            code, rss = result.stdout.split()[-2:]
+            if code != "0":
+                raise SystemExit(f"generate failed: {result.stderr}")
+            print(f"| {seconds / 60:g} min | {float(rss):.0f} | {wall:.1f} |", flush=True)
+
+
+def quality(checkpoint: Path, steps_list: list[int]) -> None:
+    from choreo.datasets import TEST, TRAIN, load_dataset
+    from choreo.metrics import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
+    from choreo_sgmd.evaluation import generate_window_dances
+    from choreo_sgmd.sampling import SamplingOptions
+
+    data = REPO.parent / "shared" / "data" / "m2d"
+    if not data.is_dir():
+        print(f"\n(quality skipped: {data} not found)")
+        return
+    generator = SGMDGenerator(checkpoint)
+    clips = load_dataset(data)
+    windows = scoring_windows([c for c in clips if c.split == TEST])
+    train = windows_as_dances([c for c in clips if c.split == TRAIN])
+    print("\n## Quality against the number of DDIM steps (M2D test windows, guidance 2)\n")
+    print(TABLE_HEADER.format(label="steps"))
+    print(table_row("real test motion", score(windows_as_dances([c for c in clips if c.split == TEST]), train)))
+    for steps in steps_list:
+        dances = generate_window_dances(generator, windows, SamplingOptions(steps=steps, guidance=2.0))
+        print(table_row(f"DDIM {steps}", score(dances, train)), flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT)
+    parser.add_argument("--steps", type=int, nargs="+", default=[5, 10, 20, 50])
+    parser.add_argument("--no-quality", action="store_true")
+    parser.add_argument("--no-memory", action="store_true")
+    args = parser.parse_args()
+    generator = SGMDGenerator(args.checkpoint)
+    print(f"checkpoint {args.checkpoint.name}: {generator.trained_steps} training steps")
+    speed(generator, args.steps)
+    if not args.no_memory:
+        memory()
+    if not args.no_quality:
+        quality(args.checkpoint, args.steps)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,191 @@
+"""Unpickling numpy arrays from untrusted files without ever calling into numpy's pickle support.
+
+AIST++ ships motions as pickles. A whitelist of numpy globals is not enough: numpy's own
+``dtype.__setstate__`` can be crashed by a crafted state, ``_reconstruct`` allocates whatever
+shape it is told, and a single memo opcode can make the C unpickler grow its memo to gigabytes.
+So (1) the opcode stream is checked first with pure-Python ``pickletools`` (allowed opcodes only,
+small memo indices), (2) the numpy globals are replaced by inert stand-ins that just record what
+the pickle asked for, and (3) arrays are built from those records with ``np.frombuffer`` after
+checking that the bytes present match the declared shape and a plain numeric dtype. Memory is
+then bounded by the file's size.
+"""
+
+from __future__ import annotations
+
+import io
+import pickle
+import pickletools
+from pathlib import Path
+
+import numpy as np
+
+MAX_FILE_BYTES = 1 << 30
+MAX_MEMO_INDEX = 1 << 16
+NUMERIC_DTYPES = {f"{kind}{size}" for kind in "fiu" for size in (1, 2, 4, 8)} - {"f1"} | {"b1"}
+ALLOWED_OPCODES = {
+    "PROTO", "FRAME", "STOP", "MARK", "POP", "POP_MARK", "DUP",
+    "EMPTY_DICT", "DICT", "SETITEM", "SETITEMS", "EMPTY_LIST", "LIST", "APPEND", "APPENDS",
+    "EMPTY_TUPLE", "TUPLE", "TUPLE1", "TUPLE2", "TUPLE3",
+    "NONE", "NEWTRUE", "NEWFALSE", "INT", "BININT", "BININT1", "BININT2", "LONG", "LONG1", "FLOAT", "BINFLOAT",
+    "STRING", "BINSTRING", "SHORT_BINSTRING", "UNICODE", "BINUNICODE", "SHORT_BINUNICODE", "BINUNICODE8",
+    "BINBYTES", "SHORT_BINBYTES", "BINBYTES8", "BYTEARRAY8",
+    "GLOBAL", "STACK_GLOBAL", "REDUCE", "BUILD",
+    "PUT", "BINPUT", "LONG_BINPUT", "GET", "BINGET", "LONG_BINGET", "MEMOIZE",
+}  # fmt: skip
+MEMO_OPCODES = {"PUT", "BINPUT", "LONG_BINPUT", "GET", "BINGET", "LONG_BINGET"}
+
+
+class UnsafePickle(ValueError):
+    """The file is not a plain pickle of numpy arrays, dicts, lists and numbers."""
+
+
+class _NdarrayMarker:
+    """Stands in for ``numpy.ndarray`` (only ever passed to _reconstruct)."""
+
+
+class _DTypeRecord:
+    def __init__(self, code, align=False, copy=False):
+        if not isinstance(code, str) or code not in NUMERIC_DTYPES:
+            raise UnsafePickle(f"dtype {code!r} is not a plain numeric type")
+        self.code, self.byteorder = code, "="
+
+    def __setstate__(self, state):
+        if not isinstance(state, tuple) or len(state) < 8 or any(part is not None for part in state[2:5]):
+            raise UnsafePickle("structured or sub-array dtypes are not allowed")
+        if state[1] not in ("<", ">", "|", "="):
+            raise UnsafePickle(f"bad byte order {state[1]!r}")
+        self.byteorder = state[1]
+
+    def resolve(self) -> np.dtype:
+        dtype = np.dtype(self.code)
+        return dtype if self.byteorder in ("|", "=") else dtype.newbyteorder(self.byteorder)
+
+
+class _ArrayRecord:
+    array: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, array: np.ndarray) -> "_ArrayRecord":
+        record = cls()
+        record.array = array
+        return record
+
+    def __setstate__(self, state):
+        if not isinstance(state, tuple) or len(state) != 5:
+            raise UnsafePickle("unexpected array state")
+        _, shape, dtype, fortran, raw = state
+        if not isinstance(dtype, _DTypeRecord):
+            raise UnsafePickle("array without a plain dtype")
+        self.array = _array_from_bytes(_as_bytes(raw), dtype, shape, "F" if fortran else "C")
+
+
+def _array_from_bytes(raw: bytes, dtype: _DTypeRecord, shape: tuple, order: str) -> np.ndarray:
+    if not isinstance(shape, tuple) or not all(isinstance(n, int) and 0 <= n for n in shape):
+        raise UnsafePickle(f"bad array shape {shape!r}")
+    resolved = dtype.resolve()
+    count = 1
+    for n in shape:
+        count *= n
+    if count * resolved.itemsize != len(raw):  # the bytes must be in the file: no allocation on trust
+        raise UnsafePickle(f"array of shape {shape} does not match its {len(raw)} bytes")
+    return np.frombuffer(raw, resolved).reshape(shape, order=order).copy()
+
+
+def _frombuffer(buffer, dtype, shape, order):
+    """Protocol 5's array constructor (numpy._core.numeric._frombuffer), in-band buffers only."""
+    if not isinstance(dtype, _DTypeRecord) or order not in ("C", "F"):
+        raise UnsafePickle("array without a plain dtype")
+    return _ArrayRecord.of(_array_from_bytes(_as_bytes(buffer), dtype, shape, order))
+
+
+def _as_bytes(raw) -> bytes:
+    if isinstance(raw, str):  # Python 2 pickles read with encoding="latin1"
+        return raw.encode("latin1")
+    if not isinstance(raw, (bytes, bytearray)):
+        raise UnsafePickle("array data is not raw bytes")
+    return bytes(raw)
+
+
+def _reconstruct(cls, shape, typecode):
+    if cls is not _NdarrayMarker:
+        raise UnsafePickle("only numpy arrays may be reconstructed")
+    return _ArrayRecord()
+
+
+def _scalar(dtype, raw):
+    if not isinstance(dtype, _DTypeRecord):
+        raise UnsafePickle("scalar without a plain dtype")
+    raw = _as_bytes(raw)
+    resolved = dtype.resolve()
+    if len(raw) != resolved.itemsize:
+        raise UnsafePickle("scalar of the wrong size")
+    return np.frombuffer(raw, resolved)[0]
+
+
+def _encode(text, encoding="utf-8"):
+    if not isinstance(text, str) or encoding not in ("latin1", "latin-1"):
+        raise UnsafePickle("unexpected codec call")
+    return text.encode("latin1")
+
+
+_STAND_INS = {
+    ("numpy.core.multiarray", "_reconstruct"): _reconstruct, ("numpy._core.multiarray", "_reconstruct"): _reconstruct,
+    ("numpy.core.multiarray", "scalar"): _scalar, ("numpy._core.multiarray", "scalar"): _scalar,
+    ("numpy.core.numeric", "_frombuffer"): _frombuffer, ("numpy._core.numeric", "_frombuffer"): _frombuffer,
+    ("numpy", "ndarray"): _NdarrayMarker, ("numpy", "dtype"): _DTypeRecord, ("_codecs", "encode"): _encode,
+}  # fmt: skip
+
+
+class _StandInUnpickler(pickle.Unpickler):
+    def find_class(self, module, name):
+        if (module, name) in _STAND_INS:
+            return _STAND_INS[(module, name)]
+        raise UnsafePickle(f"refusing to load {module}.{name}")
+
+
+def check_opcodes(data: bytes) -> None:
+    """Walk the opcode stream in pure Python: allowed opcodes only, memo indices kept small."""
+    try:
+        for opcode, argument, _ in pickletools.genops(data):
+            if opcode.name not in ALLOWED_OPCODES:
+                raise UnsafePickle(f"pickle opcode {opcode.name} is not allowed")
+            if opcode.name in MEMO_OPCODES and not (isinstance(argument, int) and 0 <= argument <= MAX_MEMO_INDEX):
+                raise UnsafePickle("pickle memo index out of range")
+    except UnsafePickle:
+        raise
+    except Exception as error:  # pickletools raises ValueError and friends on malformed streams
+        raise UnsafePickle(f"malformed pickle ({type(error).__name__})") from None
+
+
+def _materialise(value):
+    if isinstance(value, _ArrayRecord):
+        if value.array is None:
+            raise UnsafePickle("array without data")
+        return value.array
+    if isinstance(value, (_DTypeRecord, _NdarrayMarker)) or value is _NdarrayMarker:
+        raise UnsafePickle("stray numpy object")
+    if isinstance(value, dict):
+        return {key: _materialise(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_materialise(item) for item in value]
+    if isinstance(value, tuple):
+        return tuple(_materialise(item) for item in value)
+    return value
+
+
+def load_numpy_pickle(path: str | Path):
+    """The object in a pickle of numpy arrays and plain containers; ``UnsafePickle`` otherwise."""
+    path = Path(path)
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise UnsafePickle(f"file is larger than {MAX_FILE_BYTES >> 20} MiB")
+    data = path.read_bytes()
+    check_opcodes(data)
+    try:
+        value = _StandInUnpickler(io.BytesIO(data), encoding="latin1").load()
+    except UnsafePickle:
+        raise
+    except RecursionError:
+        raise UnsafePickle("pickle nests too deeply") from None
+    except Exception as error:  # malformed streams raise many kinds; none of them may escape
+        raise UnsafePickle(f"unreadable pickle ({type(error).__name__})") from None
+    return _materialise(value)
