@@ -13,6 +13,7 @@ from choreo.generator import GeneratorPlugin
 
 def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = "cpu", resume: bool = False,
                        max_steps: int | None = None, prompt_kind: str = "description", batch_size: int | None = None,
+                       style_mode: str | None = None, checkpoint_every: int | None = None, seed: int | None = None,
                        progress=None, load_progress=None) -> Path:
     """Train on a dataset folder (M2D, AIST++ or BVH+audio): its train split, validated on its test split."""
     from dataclasses import replace
@@ -24,12 +25,11 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
     from .style import style_dim
     from .training import train
 
-    train_config = TrainConfig(prompt_kind=prompt_kind)
-    if max_steps is not None:
-        train_config = replace(train_config, max_steps=max_steps)
-    if batch_size is not None:
-        train_config = replace(train_config, batch_size=batch_size)
-    model = model_config(config, style_dim=style_dim(prompt_kind))
+    train_overrides = {"max_steps": max_steps, "batch_size": batch_size, "seed": seed,
+                       "checkpoint_every": checkpoint_every, "validation_every": checkpoint_every}
+    train_config = replace(TrainConfig(prompt_kind=prompt_kind), **{k: v for k, v in train_overrides.items() if v is not None})
+    model_overrides = {"style_dim": style_dim(prompt_kind)} | ({"style_mode": style_mode} if style_mode else {})
+    model = model_config(config, **model_overrides)
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]

@@ -11,12 +11,13 @@ from typing import Sequence
 import numpy as np
 import torch
 
+from choreo.constraints import Constraints
 from choreo.metrics import Dance
 from choreo.metrics.protocol import music_beats
-from choreo.motion import vector_to_motion
+from choreo.motion import Motion, vector_to_motion
 
 from .generator import SGMDGenerator
-from .sampling import SamplingOptions, sample_independent
+from .sampling import Inpainting, SamplingOptions, sample_independent
 from .style import resolve_style
 
 
@@ -30,15 +31,25 @@ def window_styles(generator: SGMDGenerator, genres: Sequence[str | None]) -> tup
     return torch.from_numpy(np.stack(vectors)).float(), torch.tensor(keep)
 
 
+def generate_window_motions(generator: SGMDGenerator, windows: Sequence, options: SamplingOptions,
+                            with_style: bool = True, constraints: Sequence[Constraints] | None = None) -> list[Motion]:
+    """A generated motion for every scoring window (under that window's constraints, if given)."""
+    music = generator.music_scaler(torch.from_numpy(np.stack([w.features for w in windows])).float())
+    styles, keep = window_styles(generator, [w.genre if with_style else None for w in windows])
+    inpainting, values, mask = None, None, None
+    if constraints is not None:
+        values, mask = (np.stack(parts) for parts in zip(*(c.frame_vectors() for c in constraints)))
+        inpainting = Inpainting(generator.normalizer.normalize(torch.from_numpy(values).float()), torch.from_numpy(mask))
+    x0 = sample_independent(generator.model, generator.schedule, music, styles, keep,
+                            generator.model_config.frame_dim, options, inpainting)
+    vectors = generator.normalizer.denormalize(x0).numpy()
+    if mask is not None:
+        vectors[mask] = values[mask]
+    return [vector_to_motion(v)[0] for v in vectors]
+
+
 def generate_window_dances(generator: SGMDGenerator, windows: Sequence, options: SamplingOptions,
                            with_style: bool = True) -> list[Dance]:
     """A generated dance for every scoring window, scored against that window's music beats."""
-    music = generator.music_scaler(torch.from_numpy(np.stack([w.features for w in windows])).float())
-    styles, keep = window_styles(generator, [w.genre if with_style else None for w in windows])
-    x0 = sample_independent(generator.model, generator.schedule, music, styles, keep,
-                            generator.model_config.frame_dim, options)
-    dances = []
-    for window, vector in zip(windows, generator.normalizer.denormalize(x0).numpy()):
-        motion, _ = vector_to_motion(vector)
-        dances.append(Dance(f"{window.clip}@{window.start_frame}", motion.joint_positions(), music_beats(window.features)))
-    return dances
+    motions = generate_window_motions(generator, windows, options, with_style)
+    return [Dance(f"{w.clip}@{w.start_frame}", m.joint_positions(), music_beats(w.features)) for w, m in zip(windows, motions)]

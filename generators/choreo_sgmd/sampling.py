@@ -147,8 +147,11 @@ class _StyleMask:
 
 @torch.no_grad()
 def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styles: torch.Tensor,
-                       keep_style: torch.Tensor, frame_dim: int, options: SamplingOptions) -> torch.Tensor:
-    """Normalised x0 (N, W, frame_dim) for N unrelated windows (N, W, 35): how papers score 5 s clips."""
+                       keep_style: torch.Tensor, frame_dim: int, options: SamplingOptions,
+                       inpainting: Inpainting | None = None) -> torch.Tensor:
+    """Normalised x0 (N, W, frame_dim) for N unrelated windows (N, W, 35): how papers score 5 s clips.
+
+    ``inpainting`` holds (N, W, frame_dim) known values and mask, one per window."""
     generator = torch.Generator().manual_seed(options.seed)
     x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
@@ -156,4 +159,6 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
         predictions = [guided_x0(_StyleMask(model, keep_style[part]), x[part], t, music[part], styles[part], options.guidance)
                        for part in (slice(i, i + options.chunk_windows) for i in range(0, len(x), options.chunk_windows))]
         x = sampler.step(torch.cat(predictions), t, x, generator).prev_sample
+        if inpainting is not None:
+            x = inpainting.impose(x, schedule, sampler.previous(t), generator)
     return x

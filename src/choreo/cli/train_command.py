@@ -18,13 +18,17 @@ def train(
     steps: Optional[int] = typer.Option(None, help="Train until this many optimiser steps."),
     batch_size: Optional[int] = typer.Option(None, help="Windows per step (default 32)."),
     prompt: str = typer.Option("description", help="Style prompt kind: description, name or onehot."),
-    resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt."),
+    style_mode: Optional[str] = typer.Option(None, help="sgmd ablations: modulation (default), concat or none (EDGE)."),
+    checkpoint_every: Optional[int] = typer.Option(None, help="Steps between checkpoints and validations (default 500)."),
+    seed: Optional[int] = typer.Option(None, help="Seed of initialisation, batches and noise (default 0)."),
+    resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
 
     Examples:
       choreo train sgmd --data ../shared/data/m2d --out runs/sgmd --steps 8000
       choreo train sgmd --data ~/aistpp --config paper --out runs/paper --resume
+      choreo train sgmd --data ../shared/data/m2d --out runs/edge --style-mode none --steps 2000
     """
     from ..errors import ChoreoError, ParameterError
     from ..generator import available_plugins
@@ -44,7 +48,8 @@ def train(
 
         try:
             path = plugin.train(data, out, config=config, resume=resume, max_steps=steps, prompt_kind=prompt,
-                                batch_size=batch_size, progress=report)
+                                batch_size=batch_size, style_mode=style_mode, checkpoint_every=checkpoint_every,
+                                seed=seed, progress=report)
         except ValueError as error:  # bad configuration names and the like
             raise ParameterError(str(error)) from None
     stderr_console.print(f"wrote {path}")

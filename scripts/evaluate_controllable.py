@@ -1,0 +1,126 @@
+"""Controllable generation scored like the SGMD paper's Table III, on the M2D test windows.
+
+    python scripts/evaluate_controllable.py CHECKPOINT [--steps 20] [--guidance 2] [--tasks trajectory ...]
+
+For every 5 s test window the real motion supplies the constraints of each task (a root path,
+the first two frames, the first and last frames, a random 70 % of frames, the lower body, the upper
+body); the model fills in the rest from the window's music and genre. Besides the dance metrics
+against the train windows it reports the error at constrained values (joints whose position is
+fully fixed by known root and rotations), the root-path error, and the jerk on frames next to a
+border between given and generated frames relative to the real motion's jerk there.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from choreo.constraints import Constraints
+from choreo.datasets import TEST, TRAIN, load_dataset
+from choreo.metrics import Dance, score, scoring_windows, windows_as_dances
+from choreo.metrics.protocol import fmt, music_beats
+from choreo.skeleton import LOWER_BODY_JOINTS, PARENTS, UPPER_BODY_JOINTS
+from choreo_sgmd.evaluation import generate_window_motions
+from choreo_sgmd.generator import SGMDGenerator
+from choreo_sgmd.sampling import SamplingOptions
+
+REPO = Path(__file__).resolve().parents[1]
+INPAINT_KEEP = 0.7  # the paper gives 70 % of the real frames
+
+
+def task_constraints(task: str, motion, rng: np.random.Generator) -> Constraints:
+    c = Constraints.none(motion.num_frames, motion.fps)
+    if task == "trajectory":
+        return c.fix_root_path(motion.root_positions[:, [0, 2]])
+    if task == "seed motion":
+        return c.fix_motion(motion.slice_frames(0, 2))
+    if task == "in-betweening":
+        return c.fix_motion(motion.slice_frames(0, 1)).fix_motion(motion.slice_frames(-1, None), at=motion.num_frames - 1)
+    if task == "inpainting":
+        return c.fix_motion(motion, frames=rng.random(motion.num_frames) < INPAINT_KEEP)
+    if task == "upper-body generation":
+        return c.fix_motion(motion, joints=LOWER_BODY_JOINTS, root=True)
+    if task == "lower-body generation":
+        return c.fix_motion(motion, joints=UPPER_BODY_JOINTS, root=False)
+    raise ValueError(task)
+
+
+TASKS = ("trajectory", "seed motion", "in-betweening", "inpainting", "upper-body generation", "lower-body generation")
+
+
+def determined_joints(c: Constraints) -> np.ndarray:
+    """(T, 24) joints whose world position the constraints fix: root known and every ancestor's rotation."""
+    known = c.root_known.all(1)[:, None] & np.ones_like(c.joints_known)
+    for joint, parent in enumerate(PARENTS):
+        if parent >= 0:
+            known[:, joint] = known[:, parent] & c.joints_known[:, parent]
+    return known
+
+
+def jerk(positions: np.ndarray, fps: float) -> np.ndarray:
+    """(T,) mean joint jerk magnitude (m/s^3), aligned to frames 1..T-3 of the third difference."""
+    third = np.diff(positions, n=3, axis=0) * fps**3
+    out = np.full(len(positions), np.nan)
+    out[1:-2] = np.linalg.norm(third, axis=-1).mean(-1)
+    return out
+
+
+def border_frames(c: Constraints, reach: int = 2) -> np.ndarray:
+    full = c.joints_known.all(1)
+    borders = np.flatnonzero(np.diff(full.astype(int)) != 0)
+    frames = {f for b in borders for f in range(b - reach + 1, b + reach + 1)}
+    return np.array(sorted(f for f in frames if 1 <= f < len(full) - 2), dtype=int)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("checkpoint")
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
+    parser.add_argument("--steps", type=int, default=20)
+    parser.add_argument("--guidance", type=float, default=2.0)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
+    parser.add_argument("--limit", type=int, default=None, help="score only the first N windows (smoke tests)")
+    args = parser.parse_args()
+    generator = SGMDGenerator(args.checkpoint)
+    clips = load_dataset(args.data)
+    windows = scoring_windows([c for c in clips if c.split == TEST])[: args.limit]
+    train = windows_as_dances([c for c in clips if c.split == TRAIN])
+    real = [w.motion for w in windows]
+    print(f"{Path(args.checkpoint).name} (step {generator.trained_steps}), DDIM {args.steps}, w = {args.guidance:g}, "
+          f"{len(windows)} M2D test windows\n")
+    print("| task | BeatAlign | PFC | FID_k | FID_g | Div_k | Div_g | max error at fixed joints (cm) | "
+          "root path error (cm) | border jerk / real |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for task in args.tasks:
+        started = time.time()
+        rng = np.random.default_rng(args.seed)
+        constraints = [task_constraints(task, m, rng) for m in real]
+        motions = generate_window_motions(generator, windows, SamplingOptions(steps=args.steps, guidance=args.guidance,
+                                                                               seed=args.seed), constraints=constraints)
+        errors, path_errors, jerk_gen, jerk_real = [], [], [], []
+        dances = []
+        for window, motion, truth, c in zip(windows, motions, real, constraints):
+            positions, target = motion.joint_positions(), truth.joint_positions()
+            dances.append(Dance(f"{window.clip}@{window.start_frame}", positions, music_beats(window.features)))
+            fixed = determined_joints(c)
+            if fixed.any():
+                errors.append(np.linalg.norm(positions - target, axis=-1)[fixed].max())
+            if c.root_known[:, [0, 2]].all():
+                path_errors.append(np.linalg.norm(motion.root_positions[:, [0, 2]] - truth.root_positions[:, [0, 2]], axis=-1).mean())
+            frames = border_frames(c)
+            if len(frames):
+                jerk_gen.append(jerk(positions, motion.fps)[frames])
+                jerk_real.append(jerk(target, truth.fps)[frames])
+        report = score(dances, train)
+        ratio = np.nanmean(np.concatenate(jerk_gen)) / np.nanmean(np.concatenate(jerk_real)) if jerk_gen else None
+        values = (report.beat_align, report.pfc, report.fid_k, report.fid_g, report.div_k, report.div_g,
+                  100 * max(errors) if errors else None, 100 * np.mean(path_errors) if path_errors else None, ratio)
+        print(f"| {task} | " + " | ".join(fmt(v) for v in values) + f" | <!-- {time.time() - started:.0f} s -->", flush=True)
+
+
+if __name__ == "__main__":
+    main()
