@@ -15,7 +15,7 @@ from choreo_sgmd.losses import diffusion_losses
 from choreo_sgmd.model import Denoiser, RotaryEmbedding, count_parameters
 from choreo_sgmd.normalizer import Normalizer
 from choreo_sgmd.sampling import stitch, window_starts
-from choreo_sgmd.schedule import DDIMSampler, NoiseSchedule, guided_x0, make_sampler
+from choreo_sgmd.schedule import DDIMSampler, NoiseSchedule, make_sampler
 
 TINY = model_config("tiny", style_dim=8)
 
@@ -47,9 +47,15 @@ def test_denoiser_shapes_and_style_modes():
 
 def test_rotary_scores_depend_on_relative_position_only():
     rotary = RotaryEmbedding(8)
-    q, k = torch.randn(1, 1, 1, 8), torch.randn(1, 1, 1, 8)
+    q, k = torch.randn(8), torch.randn(8)
+
+    def at(vector, position):  # the vector as token `position` of a sequence, rotated there
+        sequence = torch.zeros(1, 1, position + 1, 8)
+        sequence[0, 0, position] = vector
+        return rotary(sequence)[0, 0, position]
+
     def score(i, j):
-        return float((rotary(q, torch.tensor([i])) * rotary(k, torch.tensor([j]))).sum())
+        return float((at(q, i) * at(k, j)).sum())
     assert score(3, 1) == pytest.approx(score(103, 101), abs=1e-4)
     assert score(3, 1) != pytest.approx(score(3, 2), abs=1e-4)
 
@@ -86,15 +92,21 @@ def test_ddpm_runs_every_step_and_ends_on_x0():
         make_sampler("ddpm", NoiseSchedule(), 50)
 
 
-def test_guidance_weight_one_is_the_conditional_prediction_and_two_extrapolates():
+@pytest.mark.parametrize("cache_windows", [0, 5, 100])  # none, some and all chunks' conditions cached
+def test_guidance_weight_one_is_the_conditional_prediction_and_two_extrapolates(cache_windows):
+    from choreo_sgmd.guidance import GuidedDenoiser
+
     model = Denoiser(TINY).eval()
-    x, _, music, style = inputs()
+    x, _, music, style = inputs(batch=7)
+    keep_style = torch.tensor([True, False] * 3 + [True])
     with torch.no_grad():
-        conditional = model(x, torch.full((2,), 500), music, style)
-        unconditional = model(x, torch.full((2,), 500), music, style, keep_music=torch.zeros(2, dtype=torch.bool))
-        torch.testing.assert_close(guided_x0(model, x, 500, music, style, 1.0), conditional)
-        torch.testing.assert_close(guided_x0(model, x, 500, music, style, 2.0), 2 * conditional - unconditional,
-                                   atol=1e-5, rtol=1e-5)
+        conditional = model(x, torch.full((7,), 500), music, style, keep_style=keep_style)
+        unconditional = model(x, torch.full((7,), 500), music, style, keep_music=torch.zeros(7, dtype=torch.bool),
+                              keep_style=keep_style)
+        for guidance, expected in ((1.0, conditional), (2.0, 2 * conditional - unconditional)):
+            denoiser = GuidedDenoiser(model, music, style, keep_style, guidance, chunk_windows=3, cache_windows=cache_windows)
+            assert len(denoiser.cached) == min(cache_windows // 3, 3)
+            torch.testing.assert_close(denoiser(x, 500), expected, atol=1e-5, rtol=1e-5)
 
 
 def test_normalizer_round_trip_and_range():

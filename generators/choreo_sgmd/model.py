@@ -16,6 +16,7 @@ positions relative to every frame.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import torch
 import torch.nn.functional as F
@@ -25,19 +26,25 @@ from .config import ModelConfig
 
 
 class RotaryEmbedding(nn.Module):
-    """Rotates pairs of query/key channels by angles proportional to the token's position."""
+    """Rotates pairs of query/key channels (0,1), (2,3), ... by angles proportional to the token's
+    position: one complex multiplication per pair, with the rotations cached per length."""
 
     def __init__(self, head_dim: int, base: float = 10_000.0):
         super().__init__()
         self.register_buffer("inv_freq", 1.0 / base ** (torch.arange(0, head_dim, 2).float() / head_dim), persistent=False)
+        self._cache: dict[tuple[int, torch.device], torch.Tensor] = {}
 
-    def forward(self, x: torch.Tensor, positions: torch.Tensor) -> torch.Tensor:
-        """x (B, H, N, D), positions (N,) -> x rotated."""
-        angles = positions[:, None].float() * self.inv_freq[None]  # (N, D/2)
-        cos, sin = angles.cos().repeat_interleave(2, -1), angles.sin().repeat_interleave(2, -1)
-        pairs = x.unflatten(-1, (-1, 2))
-        rotated_half = torch.stack([-pairs[..., 1], pairs[..., 0]], dim=-1).flatten(-2)
-        return x * cos.to(x.dtype) + rotated_half * sin.to(x.dtype)
+    def rotations(self, length: int, device: torch.device) -> torch.Tensor:
+        key = (length, device)
+        if key not in self._cache:
+            angles = torch.arange(length, device=device).float()[:, None] * self.inv_freq.to(device)[None]
+            self._cache[key] = torch.polar(torch.ones_like(angles), angles)  # (N, D/2) complex
+        return self._cache[key]
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        """x (B, H, N, D) -> x with token n's channel pairs rotated by n * inv_freq."""
+        pairs = torch.view_as_complex(x.float().unflatten(-1, (-1, 2)).contiguous())
+        return torch.view_as_real(pairs * self.rotations(x.shape[-2], x.device)).flatten(-2).to(x.dtype)
 
 
 class Attention(nn.Module):
@@ -50,12 +57,15 @@ class Attention(nn.Module):
         self.out = nn.Linear(dim, dim)
         self.rotary = RotaryEmbedding(dim // heads)
 
-    def forward(self, x: torch.Tensor, memory: torch.Tensor | None = None) -> torch.Tensor:
-        memory = x if memory is None else memory
-        q = self.query(x).unflatten(-1, (self.heads, -1)).transpose(1, 2)
+    def keys_values(self, memory: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """(B, H, M, D) rotated keys and values of ``memory``; constant across diffusion steps for the music."""
         k, v = self.key_value(memory).unflatten(-1, (2, self.heads, -1)).permute(2, 0, 3, 1, 4)
-        q = self.rotary(q, torch.arange(q.shape[2], device=x.device))
-        k = self.rotary(k, torch.arange(k.shape[2], device=x.device))
+        return self.rotary(k), v
+
+    def forward(self, x: torch.Tensor, memory: torch.Tensor | None = None,
+                keys_values: tuple[torch.Tensor, torch.Tensor] | None = None) -> torch.Tensor:
+        q = self.rotary(self.query(x).unflatten(-1, (self.heads, -1)).transpose(1, 2))
+        k, v = keys_values if keys_values is not None else self.keys_values(x if memory is None else memory)
         attended = F.scaled_dot_product_attention(q, k, v, dropout_p=self.dropout if self.training else 0.0)
         return self.out(attended.transpose(1, 2).flatten(-2))
 
@@ -117,9 +127,9 @@ class DecoderLayer(nn.Module):
         self.style_modulation = StyleModulation(d) if config.style_mode == "modulation" else None
         self.dropout = nn.Dropout(config.dropout)
 
-    def forward(self, x, memory, condition, style_scale):
+    def forward(self, x, memory_keys_values, condition, style_scale):
         x = x + self.films[0](self.dropout(self.self_attention(self.norms[0](x))), condition)
-        x = x + self.films[1](self.dropout(self.cross_attention(self.norms[1](x), memory)), condition)
+        x = x + self.films[1](self.dropout(self.cross_attention(self.norms[1](x), keys_values=memory_keys_values)), condition)
         if self.style_modulation is not None:
             x = self.style_modulation(x, style_scale)
         return x + self.films[2](self.dropout(self.feed_forward(self.norms[2](x))), condition)
@@ -159,23 +169,49 @@ class Denoiser(nn.Module):
             tokens = layer(tokens)
         return tokens
 
-    def forward(self, x_t: torch.Tensor, t: torch.Tensor, music: torch.Tensor, style: torch.Tensor,
-                keep_music: torch.Tensor | None = None, keep_style: torch.Tensor | None = None) -> torch.Tensor:
-        batch = x_t.shape[0]
-        keep_music = torch.ones(batch, dtype=torch.bool, device=x_t.device) if keep_music is None else keep_music
-        keep_style = torch.ones(batch, dtype=torch.bool, device=x_t.device) if keep_style is None else keep_style
+    def condition(self, music: torch.Tensor, style: torch.Tensor, keep_music: torch.Tensor | None = None,
+                  keep_style: torch.Tensor | None = None) -> "Conditioning":
+        """Everything that depends on music and style only: computed once per song when sampling."""
+        batch = music.shape[0]
+        keep_music = torch.ones(batch, dtype=torch.bool, device=music.device) if keep_music is None else keep_music
+        keep_style = torch.ones(batch, dtype=torch.bool, device=music.device) if keep_style is None else keep_style
         memory = self.encode_music(music, keep_music)
-        condition = self.time_mlp(timestep_embedding(t, self.config.latent_dim)) + self.music_pool_mlp(memory.mean(1))
+        pooled = self.music_pool_mlp(memory.mean(1))
         style = torch.where(keep_style[:, None], style, self.null_style.expand_as(style))
         style_scale = None
         if self.config.style_mode == "modulation":
             style_scale = self.style_project(style)
         elif self.config.style_mode == "concat":  # ablation: style as one more token to attend to
             memory = torch.cat([memory, self.style_project(style)[:, None]], dim=1)
+        keys_values = [layer.cross_attention.keys_values(memory) for layer in self.layers]
+        return Conditioning(pooled, style_scale, keys_values)
+
+    def denoise(self, x_t: torch.Tensor, t: torch.Tensor, conditioning: "Conditioning") -> torch.Tensor:
+        condition = self.time_mlp(timestep_embedding(t, self.config.latent_dim)) + conditioning.pooled_music
         h = self.motion_in(x_t)
-        for layer in self.layers:
-            h = layer(h, memory, condition, style_scale)
+        for layer, keys_values in zip(self.layers, conditioning.keys_values):
+            h = layer(h, keys_values, condition, conditioning.style_scale)
         return self.motion_out(self.final_norm(h))
+
+    def forward(self, x_t: torch.Tensor, t: torch.Tensor, music: torch.Tensor, style: torch.Tensor,
+                keep_music: torch.Tensor | None = None, keep_style: torch.Tensor | None = None) -> torch.Tensor:
+        return self.denoise(x_t, t, self.condition(music, style, keep_music, keep_style))
+
+
+@dataclass
+class Conditioning:
+    """The music and style side of the network for a batch of windows."""
+
+    pooled_music: torch.Tensor  # (B, d), added to the step embedding
+    style_scale: torch.Tensor | None  # (B, d), Style Modulation's FC(s)
+    keys_values: list[tuple[torch.Tensor, torch.Tensor]]  # per decoder layer: cross-attention keys and values
+
+    @staticmethod
+    def cat(parts: list["Conditioning"]) -> "Conditioning":
+        scales = None if parts[0].style_scale is None else torch.cat([p.style_scale for p in parts])
+        layers = zip(*(p.keys_values for p in parts))
+        return Conditioning(torch.cat([p.pooled_music for p in parts]), scales,
+                            [(torch.cat([k for k, _ in kv]), torch.cat([v for _, v in kv])) for kv in layers])
 
 
 def count_parameters(module: nn.Module) -> int:

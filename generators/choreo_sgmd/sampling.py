@@ -13,7 +13,8 @@ from typing import Callable
 
 import torch
 
-from .schedule import NoiseSchedule, guided_x0, make_sampler
+from .guidance import GuidedDenoiser
+from .schedule import NoiseSchedule, make_sampler
 
 
 @dataclass(frozen=True)
@@ -116,15 +117,11 @@ def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torc
     styles, keep = window_styles(style, keep_style, starts, window, num_frames)
     known = inpainting.windows(starts, window) if inpainting is not None else None
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
+    denoiser = GuidedDenoiser(model, music_windows, styles, keep, options.guidance, options.chunk_windows)
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
-        predictions = []
-        for first in range(0, count, options.chunk_windows):
-            part = slice(first, first + options.chunk_windows)
-            predictions.append(guided_x0(_StyleMask(model, keep[part]), x[part], t, music_windows[part], styles[part],
-                                         options.guidance))
-        evaluations += 1 if options.guidance == 1.0 else 2  # per window: the cost unit of diffusion samplers
-        x = sampler.step(torch.cat(predictions), t, x, generator).prev_sample
+        evaluations += denoiser.evaluations_per_step  # per window: the cost unit of diffusion samplers
+        x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
         if known is not None:
             x = known.impose(x, schedule, sampler.previous(t), generator)
         if i + 1 < len(sampler.timesteps):  # the final x0s are cross-faded by stitch() instead
@@ -132,17 +129,6 @@ def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torc
         if progress:
             progress((i + 1) / len(sampler.timesteps))
     return stitch(x, num_frames), evaluations
-
-
-class _StyleMask:
-    """The model with keep_style fixed (guidance only drops music; style stays as given)."""
-
-    def __init__(self, model, keep_style: torch.Tensor):
-        self.model, self.keep_style = model, keep_style
-
-    def __call__(self, x_t, t, music, style, keep_music=None):
-        keep_style = self.keep_style.repeat(len(x_t) // len(self.keep_style))
-        return self.model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style)
 
 
 @torch.no_grad()
@@ -155,10 +141,9 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     generator = torch.Generator().manual_seed(options.seed)
     x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
+    denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows)
     for t in sampler.timesteps.tolist():
-        predictions = [guided_x0(_StyleMask(model, keep_style[part]), x[part], t, music[part], styles[part], options.guidance)
-                       for part in (slice(i, i + options.chunk_windows) for i in range(0, len(x), options.chunk_windows))]
-        x = sampler.step(torch.cat(predictions), t, x, generator).prev_sample
+        x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
         if inpainting is not None:
             x = inpainting.impose(x, schedule, sampler.previous(t), generator)
     return x

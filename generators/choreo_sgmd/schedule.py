@@ -110,20 +110,3 @@ def make_sampler(name: str, schedule: NoiseSchedule, steps: int, eta: float = 1.
     instance = sampler(schedule, eta=eta)
     instance.set_timesteps(steps)
     return instance
-
-
-def guided_x0(model, x_t, t, music, style, guidance: float) -> torch.Tensor:
-    """Classifier-free guidance on music (paper eq. 6): w x(c, s) + (1 - w) x(null, s).
-
-    w = 1 is the plain conditional prediction (one network evaluation); otherwise the conditional
-    and music-free predictions are computed in one batch of twice the size.
-    """
-    steps = torch.full((x_t.shape[0],), t, dtype=torch.long, device=x_t.device)
-    if guidance == 1.0:
-        return model(x_t, steps, music, style)
-    batch = x_t.shape[0]
-    keep_music = torch.cat([torch.ones(batch, dtype=torch.bool), torch.zeros(batch, dtype=torch.bool)])
-    both = model(torch.cat([x_t, x_t]), torch.cat([steps, steps]), torch.cat([music, music]),
-                 torch.cat([style, style]), keep_music=keep_music.to(x_t.device))
-    conditional, unconditional = both.chunk(2)
-    return guidance * conditional + (1 - guidance) * unconditional

@@ -69,13 +69,12 @@ def generate(
         return list(output) if output is not None else [str(out_dir / f"{song.stem}.{ext}") for ext in formats]
 
     def constraints(music):
-        from ..constraints import Constraints
+        from ..constraints import Constraints, as_smpl
         from ..formats import read_motion
 
         if seed_motion is None:
             return None
-        opening = read_motion(seed_motion)
-        opening = opening.resample(music.fps) if abs(opening.fps - music.fps) > 1e-6 else opening
+        opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None)
@@ -153,11 +152,10 @@ def inpaint(
     from ..errors import ParameterError
 
     def constraints(music):
-        from ..constraints import Constraints, parse_frame_range, parse_joints
+        from ..constraints import Constraints, as_smpl, parse_frame_range, parse_joints
         from ..formats import read_motion
 
-        given = read_motion(motion)
-        given = given.resample(music.fps) if abs(given.fps - music.fps) > 1e-6 else given
+        given = as_smpl(read_motion(motion), music.fps)
         fixed = Constraints.none(music.num_frames, music.fps).fix_motion(given.slice_frames(0, music.num_frames))
         region = parse_frame_range(frames, music.num_frames) if frames else slice(0, music.num_frames)
         chosen = parse_joints(joints)
