@@ -307,3 +307,18 @@ def test_batch_generation_reports_bad_songs_and_goes_on(tiny_checkpoint, tmp_pat
     code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, EXAMPLE_SONG, "-o", tmp_path / "x.bvh",
                            "--checkpoint", tiny_checkpoint)
     assert code == 2 and "--out-dir" in err
+
+
+def test_each_process_gets_its_share_of_the_same_global_batch():
+    from choreo_sgmd.training import Trainer, _step_generator
+
+    data = synthetic_windows(count=6)
+    trainer = Trainer(TINY, DiffusionConfig(), TrainConfig(batch_size=4), data, None)
+    indices = torch.tensor([5, 0, 3, 3])
+    whole = trainer.batch(_step_generator(0, 7), data, indices)
+    for rank in range(2):
+        share = trainer.batch(_step_generator(0, 7), data, indices, slice(rank, None, 2))
+        for full, part in zip(whole, share):
+            torch.testing.assert_close(part, full[rank::2])
+    with pytest.raises(ValueError, match="does not split"):
+        Trainer(TINY, DiffusionConfig(), TrainConfig(batch_size=3), data, None, world=2)

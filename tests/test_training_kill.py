@@ -41,3 +41,24 @@ def test_killed_run_resumes_as_if_never_interrupted(tmp_path):
     assert resumed["history"] == whole["history"]  # the loss curve goes on as if uninterrupted
     for key, value in whole["state_dict"].items():
         assert torch.equal(value, resumed["state_dict"][key]), key
+
+
+def test_two_processes_train_like_one(tmp_path):
+    """torchrun with two CPU processes (gloo): each takes half of every batch; the result matches a
+    single process on the whole batch, loads, and generates."""
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    steps = ["--steps", "20"]
+    subprocess.run(train_command(tmp_path / "one", *steps), env=env, check=True, capture_output=True)
+    torchrun = [sys.executable, "-m", "torch.distributed.run", "--nproc_per_node=2", "--master_port=29531", "-m", "choreo"]
+    result = subprocess.run([*torchrun, *train_command(tmp_path / "two", *steps)[len(CHOREO):]], env=env,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-2000:]
+    one, two = load_checkpoint(tmp_path / "one" / "last.pt"), load_checkpoint(tmp_path / "two" / "last.pt")
+    assert two["step"] == 20
+    for key, value in one["state_dict"].items():
+        torch.testing.assert_close(two["state_dict"][key], value, atol=2e-5, rtol=1e-4)
+    song = Path(__file__).parents[1] / "examples" / "drum_and_bass_174bpm.wav"
+    generated = subprocess.run([*CHOREO, "generate", str(song), "-o", str(tmp_path / "d.npz"), "--checkpoint",
+                                str(tmp_path / "two" / "last.pt"), "--steps", "2"], env=env, capture_output=True, text=True)
+    assert generated.returncode == 0, generated.stderr
+    assert (tmp_path / "d.npz").stat().st_size > 0

@@ -63,6 +63,9 @@ class MusicScaler:
     def __call__(self, music: torch.Tensor) -> torch.Tensor:
         return (music - self.mean) / self.std
 
+    def to(self, device) -> "MusicScaler":
+        return MusicScaler(self.mean.to(device), self.std.to(device))
+
     def state_dict(self) -> dict:
         return {"mean": self.mean, "std": self.std}
 

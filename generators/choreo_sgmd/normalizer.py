@@ -28,6 +28,9 @@ class Normalizer:
     def denormalize(self, x: torch.Tensor) -> torch.Tensor:
         return (x + 1) / 2 * (self.high - self.low) + self.low
 
+    def to(self, device) -> "Normalizer":
+        return Normalizer(self.low.to(device), self.high.to(device))
+
     def state_dict(self) -> dict[str, torch.Tensor]:
         return {"low": self.low, "high": self.high}
 

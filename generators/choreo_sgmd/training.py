@@ -1,16 +1,25 @@
 """The training loop: diffusion on 5 s windows with condition dropout, EMA weights, validation,
 atomic checkpoints and exact resumption (batches and noise are drawn from per-step seeds, so a
-resumed run sees what an uninterrupted one would have)."""
+resumed run sees what an uninterrupted one would have).
+
+Under ``torchrun`` (WORLD_SIZE > 1) it trains with DistributedDataParallel: every rank draws the
+same global batch from the step's seed and keeps its own slice of it, gradients are averaged,
+and rank 0 alone validates and writes checkpoints. So N processes follow the same trajectory as
+one process with the same global batch, up to the order of floating-point sums.
+"""
 
 from __future__ import annotations
 
 import copy
+import os
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
 
 import torch
+import torch.distributed as dist
+from torch.nn.parallel import DistributedDataParallel
 
 
 from .checkpoint import load_checkpoint, save_checkpoint
@@ -40,30 +49,40 @@ def _step_generator(seed: int, step: int) -> torch.Generator:
 
 class Trainer:
     def __init__(self, model_config: ModelConfig, diffusion_config: DiffusionConfig, train_config: TrainConfig,
-                 train: WindowTensors, validation: WindowTensors | None):
+                 train: WindowTensors, validation: WindowTensors | None, device: torch.device | None = None,
+                 rank: int = 0, world: int = 1):
         torch.manual_seed(train_config.seed)
+        if train_config.batch_size % world:
+            raise ValueError(f"batch size {train_config.batch_size} does not split over {world} processes")
         self.model_config, self.diffusion_config, self.config = model_config, diffusion_config, train_config
-        self.model = Denoiser(model_config)
+        self.device, self.rank, self.world = device or torch.device("cpu"), rank, world
+        self.model = Denoiser(model_config).to(self.device)
+        self.network = self.model if world == 1 else DistributedDataParallel(self.model)
         self.ema = copy.deepcopy(self.model).eval().requires_grad_(False)
         self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=train_config.learning_rate,
                                            weight_decay=train_config.weight_decay)
         self.schedule = NoiseSchedule(diffusion_config)
-        self.normalizer = Normalizer.fit(train.motion.reshape(-1, train.motion.shape[-1]))
-        self.music_scaler = MusicScaler.fit(train.music)
+        self.normalizer = Normalizer.fit(train.motion.reshape(-1, train.motion.shape[-1])).to(self.device)
+        self.music_scaler = MusicScaler.fit(train.music).to(self.device)
         self.train, self.validation = train, validation
         self.step = 0
         self.history: list[list[float]] = []  # [step, train loss, validation loss or -1]
 
-    def batch(self, generator: torch.Generator, data: WindowTensors, indices: torch.Tensor):
-        x0 = self.normalizer.normalize(data.motion[indices])
-        music = self.music_scaler(data.music[indices])
+    def batch(self, generator: torch.Generator, data: WindowTensors, indices: torch.Tensor, share: slice = slice(None)):
+        """The random draws of a whole batch (from the CPU generator, so any device and any number of
+        processes see the same ones), then this process's ``share`` of it, on its device."""
         t = torch.randint(0, self.schedule.timesteps, (len(indices),), generator=generator)
-        noise = torch.randn(x0.shape, generator=generator)
+        noise = torch.randn((len(indices), *data.motion.shape[1:]), generator=generator)
         keep_music = torch.rand(len(indices), generator=generator) >= self.diffusion_config.music_dropout
         keep_style = (torch.rand(len(indices), generator=generator) >= self.diffusion_config.style_dropout)
-        return x0, music, t, noise, keep_music, keep_style & data.has_style[indices]
+        keep_style &= data.has_style[indices]
+        indices = indices[share]
+        on_device = [x[share].to(self.device) for x in (t, noise, keep_music, keep_style)]
+        x0 = self.normalizer.normalize(data.motion[indices].to(self.device))
+        music = self.music_scaler(data.music[indices].to(self.device))
+        return x0, music, on_device[0], on_device[1], on_device[2], on_device[3], data.style[indices].to(self.device)
 
-    def loss(self, model, x0, music, style, t, noise, keep_music, keep_style) -> torch.Tensor:
+    def loss(self, model, x0, music, t, noise, keep_music, keep_style, style) -> torch.Tensor:
         x_t = self.schedule.q_sample(x0, t, noise)
         predicted = model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style)
         return diffusion_losses(predicted, x0, self.normalizer).total(self.diffusion_config)
@@ -71,16 +90,19 @@ class Trainer:
     def train_step(self) -> float:
         generator = _step_generator(self.config.seed, self.step)
         indices = torch.randint(0, len(self.train), (self.config.batch_size,), generator=generator)
-        x0, music, t, noise, keep_music, keep_style = self.batch(generator, self.train, indices)
         self.model.train()
-        loss = self.loss(self.model, x0, music, self.train.style[indices], t, noise, keep_music, keep_style)
+        loss = self.loss(self.network, *self.batch(generator, self.train, indices, slice(self.rank, None, self.world)))
         self.optimizer.zero_grad(set_to_none=True)
-        loss.backward()
+        loss.backward()  # DDP averages the gradients of the ranks' equal shares: the whole batch's gradient
         torch.nn.utils.clip_grad_norm_(self.model.parameters(), 1.0)
         self.optimizer.step()
         self._update_ema()
         self.step += 1
-        return float(loss.detach())
+        loss = loss.detach()
+        if self.world > 1:
+            dist.all_reduce(loss)
+            loss /= self.world
+        return float(loss)
 
     @torch.no_grad()
     def _update_ema(self) -> None:
@@ -96,10 +118,10 @@ class Trainer:
         generator = torch.Generator().manual_seed(12345)
         count = min(VALIDATION_WINDOWS, len(self.validation))
         indices = torch.randperm(len(self.validation), generator=generator)[:count]
-        x0, music, t, noise, _, _ = self.batch(generator, self.validation, indices)
-        keep = torch.ones(count, dtype=torch.bool)
-        return float(self.loss(self.ema, x0, music, self.validation.style[indices], t, noise, keep,
-                               keep & self.validation.has_style[indices]))
+        x0, music, t, noise, _, _, style = self.batch(generator, self.validation, indices)
+        keep = torch.ones(count, dtype=torch.bool, device=self.device)
+        return float(self.loss(self.ema, x0, music, t, noise, keep, keep & self.validation.has_style[indices].to(self.device),
+                               style))
 
     def state(self) -> dict:
         return {
@@ -114,9 +136,23 @@ class Trainer:
         self.model.load_state_dict(state["state_dict"])
         self.ema.load_state_dict(state["ema_state_dict"])
         self.optimizer.load_state_dict(state["optimizer"])
-        self.normalizer = Normalizer.from_state_dict(state["normalizer"])
-        self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
+        self.normalizer = Normalizer.from_state_dict(state["normalizer"]).to(self.device)
+        self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"]).to(self.device)
         self.step, self.history = int(state["step"]), [list(row) for row in state["history"]]
+
+
+def process_group() -> tuple[torch.device, int, int]:
+    """(device, rank, world size): joins torchrun's process group when WORLD_SIZE > 1 (nccl on
+    GPUs, gloo on CPUs); a single process uses the GPU if there is one."""
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    cuda = torch.cuda.is_available()
+    if world > 1 and not dist.is_initialized():
+        dist.init_process_group("nccl" if cuda else "gloo")
+    rank = dist.get_rank() if world > 1 else 0
+    device = torch.device(f"cuda:{int(os.environ.get('LOCAL_RANK', '0'))}" if cuda else "cpu")
+    if cuda:
+        torch.cuda.set_device(device)
+    return device, rank, world
 
 
 def train(model_config: ModelConfig, train_config: TrainConfig, train_data: WindowTensors,
@@ -126,25 +162,31 @@ def train(model_config: ModelConfig, train_config: TrainConfig, train_data: Wind
     """Train until ``train_config.max_steps``; checkpoints go to ``out_dir/last.pt`` atomically."""
     if train_config.num_threads:
         torch.set_num_threads(train_config.num_threads)
+    device, rank, world = process_group()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     checkpoint = out_dir / "last.pt"
-    trainer = Trainer(model_config, diffusion_config, train_config, train_data, validation_data)
+    trainer = Trainer(model_config, diffusion_config, train_config, train_data, validation_data, device, rank, world)
     if resume and checkpoint.exists():
         trainer.load_state(load_checkpoint(checkpoint))
+    lead = rank == 0  # validates, writes checkpoints and reports progress
     started, seen, losses = time.perf_counter(), 0, []
     while trainer.step < train_config.max_steps:
         losses.append(trainer.train_step())
         seen += train_config.batch_size
         validation = None
-        if trainer.step % train_config.validation_every == 0 or trainer.step == train_config.max_steps:
+        if lead and (trainer.step % train_config.validation_every == 0 or trainer.step == train_config.max_steps):
             validation = trainer.validation_loss()
         if trainer.step % train_config.checkpoint_every == 0 or trainer.step == train_config.max_steps:
             trainer.history.append([trainer.step, sum(losses) / len(losses), -1.0 if validation is None else validation])
             losses = []
-            save_checkpoint(trainer.state(), checkpoint)
-        if progress is not None:
+            if lead:
+                save_checkpoint(trainer.state(), checkpoint)
+        if progress is not None and lead:
             rate = seen / max(time.perf_counter() - started, 1e-9)
             progress(TrainProgress(trainer.step, train_config.max_steps, losses[-1] if losses else trainer.history[-1][1],
                                    rate, validation))
+    if world > 1:
+        dist.barrier()  # the other ranks leave only once rank 0's last checkpoint is on disk
+        dist.destroy_process_group()
     return checkpoint
