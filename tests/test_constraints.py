@@ -232,3 +232,10 @@ def test_bad_constraints_give_one_line_and_no_output(tiny_generator, song_file, 
     assert code != 0 and message in err, err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not (tmp_path / "out.bvh").exists()
+
+
+def test_generate_preview_writes_a_video_beside_the_dance(tiny_generator, song_file, tmp_path, capsys):
+    code, err = run_cli(capsys, "generate", song_file, "-o", tmp_path / "d.bvh", "--preview", "--checkpoint",
+                        tiny_generator.checkpoint, "--steps", "1")
+    assert code == 0, err
+    assert (tmp_path / "d.mp4").stat().st_size > 10_000 and "d.mp4" in err

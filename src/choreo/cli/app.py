@@ -7,6 +7,7 @@ import typer
 from . import commands
 from .eval_command import evaluate
 from .generate_command import generate, inbetween, inpaint, trajectory
+from .render_command import render
 from .train_command import train
 
 app = typer.Typer(
@@ -29,3 +30,4 @@ app.command("generators")(commands.generators)
 app.command("prepare")(commands.prepare)
 app.command("eval")(evaluate)
 app.command("train")(train)
+app.command("render")(render)

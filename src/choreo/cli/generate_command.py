@@ -40,6 +40,7 @@ def generate(
     format: Optional[str] = typer.Option(None, "--format", "-f",
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
+    preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
 ) -> None:
     """Generate a dance for a song, or for many songs in one run.
 
@@ -51,6 +52,7 @@ def generate(
       choreo generate song.mp3 -o dance.bvh -o dance.npz --style "slow, romantic, hips leading" --seed 7
       choreo generate song.mp3 -o dance.bvh --style 0:30=waltz,30:=cha-cha --seed-motion opening.bvh
       choreo generate songs/*.mp3 --out-dir out/ --format bvh,npz --json
+      choreo generate song.mp3 -o dance.bvh --preview      # and dance.mp4 to watch
     """
     import json
 
@@ -77,7 +79,7 @@ def generate(
         opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
@@ -203,6 +205,7 @@ class Settings:
     sampler: str
     seed: int
     format: str | None
+    preview: bool = False  # render an MP4 with the music beside the first output file
 
 
 def load_backend(settings: Settings):
@@ -249,6 +252,13 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     for path in output:
         write_motion(motion, path, format=settings.format)
     written = [path for path in output if path != "-"]
+    if settings.preview and written:
+        from ..render import RenderConfig
+        from .render_command import render_preview
+
+        video = Path(written[0]).with_suffix(".mp4")
+        render_preview(motion, video, RenderConfig(), song)
+        written.append(str(video))
     if written:
         kept = f", {100 * constraints.known_fraction():.0f} % of joint values given" if constraints else ""
         stderr_console.print(

@@ -1,0 +1,67 @@
+"""`choreo render`: a preview video, GIF or picture strip of a motion, or a diagnostic plot."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .progress import progress_bar, stderr_console
+
+
+def render(
+    motion: Path = typer.Argument(..., help="Motion file: BVH, NPZ, AIST++ pkl, JSON."),
+    output: str = typer.Option(..., "-o", "--output", help="preview.mp4 (.mov/.mkv/.webm), .gif, or .png (a strip of moments)."),
+    music: Optional[Path] = typer.Option(None, help="Song to mux into the video (and whose beats --plot beats draws)."),
+    plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats) or 'path' (root from above)."),
+    size: str = typer.Option("640x480", help="Frame size WIDTHxHEIGHT in pixels."),
+    fps: Optional[float] = typer.Option(None, help="Frame rate of the preview (default: the motion's; GIF at most 15)."),
+    strip: int = typer.Option(6, help="PNG: how many moments side by side (1: the middle frame)."),
+) -> None:
+    """Render a motion: a shaded 3D figure the camera follows, with the music; or a beats/path plot.
+
+    Examples:
+      choreo render dance.bvh --music song.mp3 -o preview.mp4
+      choreo render dance.bvh -o strip.png --strip 8
+      choreo render dance.bvh --music song.mp3 --plot beats -o beats.png
+      choreo render dance.bvh --plot path -o path.svg
+    """
+    from ..formats import read_motion
+
+    config = render_config(size, fps, strip)
+    dance = read_motion(motion)
+    if plot is not None:
+        from ..render.plots import render_plot
+
+        beats = None
+        if music is not None:
+            from ..music import Music
+
+            beats = (Music.from_file(music).beat_times * dance.fps).round().astype(int)
+        render_plot(plot, dance, output, beats)
+    else:
+        render_preview(dance, Path(output), config, music)
+    stderr_console.print(f"wrote {output}", highlight=False)
+
+
+def render_config(size: str, fps: float | None, strip: int):
+    from ..errors import ParameterError
+    from ..render import RenderConfig
+
+    try:
+        width, height = (int(v) for v in size.lower().split("x"))
+    except ValueError:
+        raise ParameterError(f"--size {size!r} must look like 640x480") from None
+    if fps is not None and not 1 <= fps <= 120:
+        raise ParameterError("--fps must lie in 1..120")
+    if strip < 1:
+        raise ParameterError("--strip must be at least 1")
+    return RenderConfig(width=width, height=height, fps=fps, strip_frames=strip)
+
+
+def render_preview(motion, output: Path, config, music: Path | None) -> None:
+    from ..render import render_motion
+
+    with progress_bar(f"rendering {output.name}") as update:
+        render_motion(motion, output, config, music, progress=lambda done, total: update(done, total))

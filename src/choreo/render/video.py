@@ -1,0 +1,111 @@
+"""Turning a motion into a preview: MP4 with the music muxed in (ffmpeg), GIF, or a PNG strip."""
+
+from __future__ import annotations
+
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterator
+
+import numpy as np
+from PIL import Image
+
+from ..errors import OutputError, ParameterError
+from ..fileio import atomic_path
+from ..motion import Motion
+from .camera import CameraConfig, FollowCamera
+from .figure import render_frame
+
+VIDEO_SUFFIXES = {".mp4", ".mov", ".mkv", ".webm"}
+GIF_MAX_FPS = 15.0  # GIF frame delays are in hundredths of a second; more frames only bloat the file
+
+
+@dataclass(frozen=True)
+class RenderConfig:
+    width: int = 640
+    height: int = 480
+    fps: float | None = None  # default: the motion's (GIF: at most GIF_MAX_FPS)
+    strip_frames: int = 6  # PNG: this many moments side by side (1: the middle frame alone)
+    camera: CameraConfig = CameraConfig()
+
+
+def frames_of(motion: Motion, config: RenderConfig, indices: np.ndarray | None = None,
+              progress: Callable[[int, int], None] | None = None) -> Iterator[np.ndarray]:
+    positions = motion.joint_positions()
+    camera = FollowCamera(motion.root_positions, motion.fps, config.width, config.height, config.camera)
+    indices = np.arange(motion.num_frames) if indices is None else indices
+    for count, frame in enumerate(indices):
+        yield render_frame(positions[frame], camera, int(frame), caption=f"{frame / motion.fps:6.2f} s")
+        if progress:
+            progress(count + 1, len(indices))
+
+
+def ffmpeg_executable() -> str:
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise OutputError("video previews need the imageio-ffmpeg package (pip install imageio-ffmpeg)") from None
+    return imageio_ffmpeg.get_ffmpeg_exe()
+
+
+def write_video(motion: Motion, path: Path, config: RenderConfig, music: Path | None = None, progress=None) -> None:
+    fps = config.fps or motion.fps
+    if fps != motion.fps:
+        motion = motion.resample(fps)
+    width, height = config.width // 2 * 2, config.height // 2 * 2  # H.264 wants even sizes
+    config = RenderConfig(width, height, fps, config.strip_frames, config.camera)
+    with atomic_path(path) as temporary:
+        command = [ffmpeg_executable(), "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
+                   "-s", f"{width}x{height}", "-r", f"{fps:g}", "-i", "-"]
+        if music is not None:
+            command += ["-i", str(music), "-map", "0:v:0", "-map", "1:a:0", "-c:a", "aac", "-b:a", "160k", "-shortest"]
+        command += ["-c:v", "libx264", "-preset", "veryfast", "-crf", "20", "-pix_fmt", "yuv420p", str(temporary)]
+        encoder = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
+        try:
+            for image in frames_of(motion, config, progress=progress):
+                encoder.stdin.write(image.tobytes())
+            encoder.stdin.close()
+        except BrokenPipeError:
+            pass
+        finally:
+            error = encoder.stderr.read().decode(errors="replace").strip()
+            code = encoder.wait()
+        if code != 0:
+            raise OutputError(f"ffmpeg could not write {path.name}: {error.splitlines()[-1] if error else code}")
+
+
+def write_gif(motion: Motion, path: Path, config: RenderConfig, progress=None) -> None:
+    fps = min(config.fps or motion.fps, GIF_MAX_FPS)
+    motion = motion.resample(fps) if fps != motion.fps else motion
+    images = [Image.fromarray(frame).quantize(colors=96, dither=Image.Dither.NONE)
+              for frame in frames_of(motion, config, progress=progress)]
+    with atomic_path(path) as temporary:
+        images[0].save(temporary, format="GIF", save_all=True, append_images=images[1:], duration=round(1000 / fps),
+                       loop=0, optimize=True)
+
+
+def write_strip(motion: Motion, path: Path, config: RenderConfig, progress=None) -> None:
+    count = max(1, min(config.strip_frames, motion.num_frames))
+    indices = (np.array([motion.num_frames // 2]) if count == 1
+               else np.linspace(0, motion.num_frames - 1, count).round().astype(int))
+    strip = np.concatenate(list(frames_of(motion, config, indices, progress)), axis=1)
+    with atomic_path(path) as temporary:
+        Image.fromarray(strip).save(temporary, format="PNG", optimize=True)
+
+
+def render_motion(motion: Motion, path: str | Path, config: RenderConfig = RenderConfig(), music: str | Path | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> Path:
+    """Write a preview of ``motion`` to ``path``; the kind follows the extension (.mp4/.mov/.mkv/.webm, .gif, .png)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if config.width < 16 or config.height < 16:
+        raise ParameterError("preview size must be at least 16x16 pixels")
+    if suffix in VIDEO_SUFFIXES:
+        write_video(motion, path, config, None if music is None else Path(music), progress)
+    elif suffix == ".gif":
+        write_gif(motion, path, config, progress)
+    elif suffix == ".png":
+        write_strip(motion, path, config, progress)
+    else:
+        raise OutputError(f"cannot render to {path.name}: use .mp4, .mov, .mkv, .webm, .gif or .png")
+    return path
