@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-import torch
 
 from choreo.constraints import (Constraints, parse_frame_range, parse_joints, parse_style_schedule, path_to_frames,
                                 read_pose, read_root_path)
@@ -100,19 +99,6 @@ def test_poses_come_from_any_frame_of_a_motion_file(tmp_path):
     assert last.num_frames == 1 and np.allclose(last.root_positions[0], motion.root_positions[-1])
     with pytest.raises(ChoreoError):
         read_pose(f"{tmp_path / 'm.npz'}@20")
-
-
-@pytest.fixture(scope="module")
-def tiny_generator(tmp_path_factory):
-    from choreo_sgmd.config import TrainConfig, model_config
-    from choreo_sgmd.generator import SGMDGenerator
-    from choreo_sgmd.training import train
-    from test_sgmd import synthetic_windows
-
-    data = synthetic_windows()
-    data.style = torch.eye(14)[:4]
-    config = TrainConfig(batch_size=4, max_steps=5, validation_every=5, checkpoint_every=5, prompt_kind="onehot")
-    return SGMDGenerator(train(model_config("tiny", style_dim=14), config, data, None, tmp_path_factory.mktemp("t")))
 
 
 def song(seconds=12.0, rate=22050):

@@ -1,5 +1,7 @@
 """SGMD backend: model pieces, schedule and samplers, checkpoints, training and long-form sampling."""
 
+from conftest import synthetic_windows
+
 
 import numpy as np
 import pytest
@@ -10,7 +12,6 @@ from choreo.generator import GenerationRequest
 from choreo.music import Music
 from choreo_sgmd.checkpoint import load_checkpoint, save_checkpoint
 from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
-from choreo_sgmd.data import WindowTensors
 from choreo_sgmd.losses import diffusion_losses
 from choreo_sgmd.model import Denoiser, RotaryEmbedding, count_parameters
 from choreo_sgmd.normalizer import Normalizer
@@ -144,16 +145,6 @@ def test_checkpoint_round_trip_and_refusals(tmp_path):
         load_checkpoint(tmp_path / "junk.pt")
 
 
-def synthetic_windows(count=4, frames=150, seed=0) -> WindowTensors:
-    g = torch.Generator().manual_seed(seed)
-    t = torch.arange(frames) / 30.0
-    motion = torch.zeros(count, frames, 151)
-    motion[..., 4:7] = torch.stack([torch.sin(t), 0.9 + 0.05 * torch.sin(4 * t), torch.cos(t)], -1)
-    motion[..., 7:] = torch.tensor([1.0, 0, 0, 0, 1, 0]).repeat(24) + 0.1 * torch.sin(3 * t)[:, None]
-    return WindowTensors(motion, torch.randn(count, frames, 35, generator=g), torch.randn(count, 8, generator=g),
-                         torch.ones(count, dtype=torch.bool))
-
-
 def test_training_lowers_the_loss_and_resumes_exactly(tmp_path):
     from choreo_sgmd.training import train
 
@@ -179,17 +170,6 @@ def test_windows_cover_the_song_and_stitch_back():
     frames = torch.arange(600, dtype=torch.float32)[:, None]
     windows = torch.stack([torch.cat([frames, frames[:75]])[s: s + 150] for s in window_starts(600, 150)])
     torch.testing.assert_close(stitch(windows, 600), frames)
-
-
-@pytest.fixture(scope="module")
-def tiny_checkpoint(tmp_path_factory):
-    from choreo_sgmd.training import train
-
-    out = tmp_path_factory.mktemp("tiny")
-    config = TrainConfig(batch_size=4, max_steps=5, validation_every=5, checkpoint_every=5, prompt_kind="onehot")
-    data = synthetic_windows()
-    data.style = torch.eye(14)[:4]
-    return train(model_config("tiny", style_dim=14), config, data, None, out)
 
 
 def test_long_form_generation_is_seamless_and_deterministic(tiny_checkpoint):

@@ -6,6 +6,7 @@ stream. A song of any length passes through in blocks, so memory does not depend
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 from typing import Iterator
@@ -34,11 +35,34 @@ def _check_path(path: Path) -> None:
         raise AudioError(f"{path} is empty")
 
 
+@contextlib.contextmanager
+def _decoder_notes_silenced() -> Iterator[None]:
+    """Send C-level stderr to /dev/null while libsndfile's mp3 decoder (mpg123) runs: it prints
+    "Note: Illegal Audio-MPEG-Header..." and the like straight to file descriptor 2, which would
+    break the CLI's promise of one line per error. Python-level output is unaffected in content
+    (a progress-bar refresh that lands inside a decoder call is simply skipped)."""
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr at all
+        yield
+        return
+    with open(os.devnull, "wb") as null:
+        os.dup2(null.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
 def _open(path: Path) -> sf.SoundFile:
     try:
-        return sf.SoundFile(str(path))
+        with _decoder_notes_silenced():
+            return sf.SoundFile(str(path))
     except Exception as error:  # libsndfile reports every decoding problem this way
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        if "does not exist" in reason or "Error opening" in reason:  # libsndfile's words for a bad mp3 or text
+            reason = "damaged, truncated or not audio"
         raise AudioError(f"{path} is not a readable audio file ({reason})") from None
 
 
@@ -76,7 +100,8 @@ def iter_audio_blocks(path: str | os.PathLike, sr: int, start: float | None = No
         while last is None or position < last:
             want = block_frames if last is None else min(block_frames, last - position)
             try:
-                data = handle.read(want, dtype="float32", always_2d=True)
+                with _decoder_notes_silenced():
+                    data = handle.read(want, dtype="float32", always_2d=True)
             except Exception as error:
                 raise AudioError(f"{path}: decoding failed at {position / native_sr:.1f} s ({error})") from None
             done = len(data) < want

@@ -1,0 +1,70 @@
+"""Write the corpus of bad inputs that tests/test_bad_inputs.py feeds to the CLI.
+
+Small, deterministic files, committed; rerun from the repository root to regenerate them:
+    python tests/bad_inputs/make_corpus.py
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import soundfile as sf
+import torch
+
+HERE = Path(__file__).parent
+RATE = 16000
+
+
+def tone(seconds: float) -> np.ndarray:
+    t = np.arange(int(seconds * RATE)) / RATE
+    return (0.3 * np.sin(2 * np.pi * 330 * t)).astype(np.float32)
+
+
+THREE_JOINT_BVH = """HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 10 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT Chest
+  {
+    OFFSET 0 10 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT Head
+    {
+      OFFSET 0 10 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      End Site
+      {
+        OFFSET 0 5 0
+      }
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.0333333
+""" + "0 90 0 0 0 0 0 0 0 0 0 0\n" * 3
+
+
+def main() -> None:
+    (HERE / "not_audio.mp3").write_text("this is a text file with an mp3 extension\n")
+    (HERE / "empty.wav").write_bytes(b"")
+    sf.write(HERE / "silence.wav", np.zeros(2 * RATE, np.float32), RATE)
+    sf.write(HERE / "short.wav", tone(0.2), RATE)
+    sf.write(HERE / "good.mp3", tone(3.0), RATE, format="MP3")
+    good = (HERE / "good.mp3").read_bytes()
+    (HERE / "truncated.mp3").write_bytes(good[:400])
+    rng = np.random.default_rng(0)
+    (HERE / "corrupt.mp3").write_bytes(good[:200] + rng.integers(0, 256, 4000, dtype=np.uint8).tobytes())
+    (HERE / "good.mp3").unlink()
+    (HERE / "song.xyz").write_bytes(b"RIFF....WAVE")
+    (HERE / "other_skeleton.bvh").write_text(THREE_JOINT_BVH)
+    (HERE / "truncated.bvh").write_text(THREE_JOINT_BVH[: THREE_JOINT_BVH.index("MOTION") - 20])
+    (HERE / "wrong_shape_path.csv").write_text("1,2,3,4\n5,6,7,8\n")
+    (HERE / "corrupt_checkpoint.pt").write_bytes(b"PK\x03\x04 not really a checkpoint")
+    torch.save({"generator": "graph", "format_version": 1}, HERE / "graph_checkpoint.pt")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,36 @@
+"""Shared fixtures: a tiny SGMD checkpoint trained in seconds on synthetic windows."""
+
+import pytest
+import torch
+
+from choreo_sgmd.data import WindowTensors
+
+
+def synthetic_windows(count=4, frames=150, seed=0) -> WindowTensors:
+    g = torch.Generator().manual_seed(seed)
+    t = torch.arange(frames) / 30.0
+    motion = torch.zeros(count, frames, 151)
+    motion[..., 4:7] = torch.stack([torch.sin(t), 0.9 + 0.05 * torch.sin(4 * t), torch.cos(t)], -1)
+    motion[..., 7:] = torch.tensor([1.0, 0, 0, 0, 1, 0]).repeat(24) + 0.1 * torch.sin(3 * t)[:, None]
+    return WindowTensors(motion, torch.randn(count, frames, 35, generator=g), torch.randn(count, 8, generator=g),
+                         torch.ones(count, dtype=torch.bool))
+
+
+@pytest.fixture(scope="session")
+def tiny_checkpoint(tmp_path_factory):
+    """Five training steps of the tiny configuration, one-hot styles: enough to exercise every code path."""
+    from choreo_sgmd.config import TrainConfig, model_config
+    from choreo_sgmd.training import train
+
+    out = tmp_path_factory.mktemp("tiny")
+    config = TrainConfig(batch_size=4, max_steps=5, validation_every=5, checkpoint_every=5, prompt_kind="onehot")
+    data = synthetic_windows()
+    data.style = torch.eye(14)[:4]
+    return train(model_config("tiny", style_dim=14), config, data, None, out)
+
+
+@pytest.fixture(scope="session")
+def tiny_generator(tiny_checkpoint):
+    from choreo_sgmd.generator import SGMDGenerator
+
+    return SGMDGenerator(tiny_checkpoint)
