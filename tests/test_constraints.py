@@ -69,7 +69,7 @@ def test_style_schedule_syntax():
 @pytest.mark.parametrize("text, message", [
     ("", "empty"), ("x,z\n1,2\n", "at least two"), ("x,z\n1,2\n3,oops\n", "number"),
     ("a,b\n1,2\n3,4\n", "header"), ("1,2,3,4\n5,6,7,8\n", "2 columns"), ("t,x,z\n0,0,0\n0,1,1\n", "increase"),
-    ("x,z\n1,2\nnan,3\n", "finite"),
+    ("x,z\n1,2\nnan,3\n", "finite"), ("t,x,z\n-1e308,0,0\n1e308,1,1\n", "not a dance floor"),
 ])  # fmt: skip
 def test_bad_path_files_are_one_clear_error(tmp_path, text, message):
     (tmp_path / "p.csv").write_text(text)
@@ -225,3 +225,23 @@ def test_generate_preview_writes_a_video_beside_the_dance(tiny_generator, song_f
                         tiny_generator.checkpoint, "--steps", "1")
     assert code == 0, err
     assert (tmp_path / "d.mp4").stat().st_size > 10_000 and "d.mp4" in err
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=150, deadline=None)
+@given(text=st.one_of(st.text(max_size=300), st.lists(st.lists(st.sampled_from(
+    ["0", "1.5", "-2", "nan", "inf", "x", "z", "t", "y", "", " ", "1e308", "abc"]), max_size=5), max_size=8).map(
+    lambda rows: "\n".join(",".join(r) for r in rows))))
+def test_fuzzed_path_files_only_raise_our_errors(tmp_path_factory, text):
+    path = tmp_path_factory.mktemp("fuzz") / "p.csv"
+    path.write_text(text)
+    try:
+        times, xz, heights = read_root_path(path)
+    except ChoreoError:
+        return
+    assert np.isfinite(xz).all() and len(xz) >= 2
+    frames, _ = path_to_frames(times, xz, heights, 50)
+    assert frames.shape == (50, 2)

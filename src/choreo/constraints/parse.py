@@ -15,6 +15,7 @@ from ..skeleton import JOINT_NAMES, LOWER_BODY_JOINTS, UPPER_BODY_JOINTS
 
 JOINT_SETS = {"all": tuple(range(24)), "upper": UPPER_BODY_JOINTS, "lower": LOWER_BODY_JOINTS}
 PATH_SUFFIXES = (".csv", ".txt")
+MAX_PATH_VALUE = 1e4
 
 
 def parse_frame_range(text: str, num_frames: int) -> slice:
@@ -150,6 +151,8 @@ def read_root_path(path: str | Path) -> tuple[np.ndarray | None, np.ndarray, np.
         raise InputError(f"{path}: a path needs at least two points")
     if not np.isfinite(values).all():
         raise InputError(f"{path}: path values must be finite numbers")
+    if np.abs(values).max() > MAX_PATH_VALUE:
+        raise InputError(f"{path}: path values beyond {MAX_PATH_VALUE:g} (metres or seconds) are not a dance floor")
     column = {name: values[:, i] for i, name in enumerate(columns)}
     times = column.get("t")
     if times is not None and not (np.diff(times) > 0).all():
