@@ -1,11 +1,11 @@
 """How fast, how big and how good is SGMD generation on this CPU?
 
-    python benchmarks/bench_sgmd.py [--checkpoint PATH] [--steps 5 10 20 50] [--no-quality]
+    python benchmarks/bench_sgmd.py [--checkpoint PATH] [--steps 5 10 20 50] [--memory-minutes 1 10 60] [--no-quality]
 
 1. Speed: seconds and network evaluations to dance 60 s of music (the example loop tiled to
    60 s), per number of DDIM steps, with guidance 2, against the 3 s target.
-2. Memory: peak RSS of a whole `choreo generate` run (fresh process, default settings) for a 60 s
-   and a 10 min song, side by side.
+2. Memory: peak RSS of a whole `choreo generate` run (fresh process, default settings) for songs
+   of 1 and 10 minutes (and an hour with --memory-minutes 1 10 60), side by side.
 3. Quality against the number of steps: the M2D test windows scored like the reference row, for
    each step count (skipped without ../shared/data/m2d or with --no-quality).
 """
@@ -65,12 +65,12 @@ def speed(generator: SGMDGenerator, steps_list: list[int]) -> None:
                   f"{seconds / TARGET_SECONDS:.2f} |", flush=True)
 
 
-def memory() -> None:
+def memory(minutes: list[float]) -> None:
     print("\n## Peak memory of `choreo generate` (fresh process, default settings)\n")
     print("| song | peak RSS (MiB) | wall (s) |")
     print("| --- | ---: | ---: |")
     with tempfile.TemporaryDirectory() as folder:
-        for seconds in (60.0, 600.0):
+        for seconds in (60.0 * m for m in minutes):
             audio, rate = song_of(seconds)
             song = Path(folder) / f"song{seconds:.0f}.wav"
             sf.write(song, audio, rate)
@@ -111,13 +111,14 @@ def main() -> None:
     parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT)
     parser.add_argument("--steps", type=int, nargs="+", default=[5, 10, 20, 50])
     parser.add_argument("--no-quality", action="store_true")
-    parser.add_argument("--no-memory", action="store_true")
+    parser.add_argument("--memory-minutes", type=float, nargs="*", default=[1, 10],
+                        help="song lengths for the peak-RSS runs (none to skip), e.g. 1 10 60")
     args = parser.parse_args()
     generator = SGMDGenerator(args.checkpoint)
     print(f"checkpoint {args.checkpoint.name}: {generator.trained_steps} training steps")
     speed(generator, args.steps)
-    if not args.no_memory:
-        memory()
+    if args.memory_minutes:
+        memory(args.memory_minutes)
     if not args.no_quality:
         quality(args.checkpoint, args.steps)
 
