@@ -9,7 +9,7 @@ from typing import Callable, Iterator
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-stderr_console = Console(stderr=True)
+stderr_console = Console(stderr=True, soft_wrap=True)  # one message, one line, whatever the width
 LOG_INTERVAL = 30.0  # seconds between plain progress lines when stderr is not a terminal
 stdout_console = Console()
 
