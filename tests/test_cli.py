@@ -51,10 +51,24 @@ def test_top_level_help(capsys):
     assert code == 0 and all(c in out for c in COMMANDS)
 
 
-def test_generators_lists_both_backends_and_says_they_are_placeholders(capsys):
+def test_generators_lists_both_backends_and_which_is_ready(capsys):
     code, out, _ = run_cli(capsys, "generators")
     assert code == 0
-    assert "sgmd" in out and "graph" in out and "placeholder" in out
+    rows = {line.split("│")[1].strip(): line for line in out.splitlines() if line.count("│") > 2}
+    assert "yes" in rows["sgmd"] and "placeholder" in rows["graph"]
+
+
+def test_generate_with_the_bundled_model_and_no_flags(tmp_path, capsys):
+    from choreo.formats import read_motion
+
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", "--steps", "2")
+    assert code == 0, err
+    motion = read_motion(tmp_path / "dance.bvh")
+    import soundfile as sf
+
+    assert motion.fps == 30 and abs(motion.duration - sf.info(str(EXAMPLE_SONG)).duration) < 0.1
+    speed = np.linalg.norm(np.diff(motion.joint_positions(), axis=0), axis=-1).mean() * 30
+    assert 0.05 < speed < 3.0  # it moves, like a person (metres per second, mean over joints)
 
 
 def test_info_on_motion(tmp_path, capsys):

@@ -21,7 +21,7 @@ OUTPUT = typer.Option(..., "-o", "--output",
 STYLE = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text, or a schedule 0:30=waltz,30:=cha-cha.")
 CHECKPOINT = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one.")
 GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
-STEPS = typer.Option(None, help="Sampling steps (default: the backend's; see docs/sgmd.md).")
+STEPS = typer.Option(None, help="Sampling steps (default: the backend's: 10 DDIM steps for sgmd, 1000 for ddpm).")
 GUIDANCE = typer.Option(2.0, help="Classifier-free guidance weight on the music (1 = none).")
 SAMPLER = typer.Option("ddim", help="ddim (fast, any number of steps) or ddpm (the full chain).")
 SEED = typer.Option(0, help="Random seed: same seed, same dance.")
