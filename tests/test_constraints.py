@@ -1,6 +1,7 @@
 """Constraints for controllable generation: masks, user syntax, and SGMD's masked sampling."""
 
 import numpy as np
+import torch
 import pytest
 
 from choreo.constraints import (Constraints, parse_frame_range, parse_joints, parse_style_schedule, path_to_frames,
@@ -245,3 +246,18 @@ def test_fuzzed_path_files_only_raise_our_errors(tmp_path_factory, text):
     assert np.isfinite(xz).all() and len(xz) >= 2
     frames, _ = path_to_frames(times, xz, heights, 50)
     assert frames.shape == (50, 2)
+
+
+def test_root_alignment_moves_the_prediction_rigidly_onto_the_given_root():
+    from choreo_sgmd.sampling import Inpainting
+
+    values = torch.zeros(2, 10, 151)
+    values[0, :3, 4:7] = torch.tensor([1.0, 0.5, -2.0])  # window 0: root given on 3 frames
+    mask = torch.zeros(2, 10, 151, dtype=torch.bool)
+    mask[0, :3, 4:7] = True
+    prediction = torch.randn(2, 10, 151)
+    aligned = Inpainting(values, mask).align_root(prediction)
+    shift = aligned[0, :, 4:7] - prediction[0, :, 4:7]
+    assert torch.allclose(shift, shift[:1].expand_as(shift))  # rigid: the same offset on every frame
+    assert torch.allclose(aligned[0, :3, 4:7].mean(0), values[0, :3, 4:7].mean(0), atol=1e-6)
+    assert torch.equal(aligned[1], prediction[1]) and torch.equal(aligned[..., 7:], prediction[..., 7:])

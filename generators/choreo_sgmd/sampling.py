@@ -13,6 +13,8 @@ from typing import Callable
 
 import torch
 
+from choreo.motion.vector import ROOT_SLICE
+
 from .guidance import GuidedDenoiser
 from .schedule import NoiseSchedule, make_sampler
 
@@ -75,6 +77,23 @@ class Inpainting:
     def windows(self, starts: list[int], window: int) -> "Inpainting":
         return Inpainting(windowed(self.values, starts, window), windowed(self.mask.float(), starts, window) > 0.5)
 
+    def align_root(self, x0: torch.Tensor) -> torch.Tensor:
+        """Shift each window's predicted root so that it matches the given root on average.
+
+        The model is indifferent to where on the floor it dances (windows are cut anywhere in a
+        room), so with a few given frames it would place the dancer metres away and jump there;
+        moving its prediction rigidly onto the given frames keeps everything it predicted but the
+        location. Normalisation is affine per channel, so the shift is a constant there too.
+        """
+        mask = self.mask[..., ROOT_SLICE]
+        known = mask.sum(-2)
+        if not known.any():
+            return x0
+        offset = ((self.values[..., ROOT_SLICE] - x0[..., ROOT_SLICE]) * mask).sum(-2) / known.clamp(min=1)
+        x0 = x0.clone()
+        x0[..., ROOT_SLICE] += torch.where(known > 0, offset, torch.zeros_like(offset)).unsqueeze(-2)
+        return x0
+
     def impose(self, x: torch.Tensor, schedule: NoiseSchedule, t_prev: int, generator: torch.Generator) -> torch.Tensor:
         if t_prev < 0:
             return torch.where(self.mask, self.values, x)
@@ -121,7 +140,8 @@ def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torc
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
         evaluations += denoiser.evaluations_per_step  # per window: the cost unit of diffusion samplers
-        x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
+        x0 = denoiser(x, t) if known is None else known.align_root(denoiser(x, t))
+        x = sampler.step(x0, t, x, generator).prev_sample
         if known is not None:
             x = known.impose(x, schedule, sampler.previous(t), generator)
         if i + 1 < len(sampler.timesteps):  # the final x0s are cross-faded by stitch() instead
@@ -143,7 +163,8 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
     denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows)
     for t in sampler.timesteps.tolist():
-        x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
+        x0 = denoiser(x, t) if inpainting is None else inpainting.align_root(denoiser(x, t))
+        x = sampler.step(x0, t, x, generator).prev_sample
         if inpainting is not None:
             x = inpainting.impose(x, schedule, sampler.previous(t), generator)
     return x
