@@ -86,7 +86,7 @@ def memory(minutes: list[float]) -> None:
 
 def quality(checkpoint: Path, steps_list: list[int]) -> None:
     from choreo.datasets import TEST, TRAIN, load_dataset
-    from choreo.metrics import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
+    from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
     from choreo_sgmd.evaluation import generate_window_dances
     from choreo_sgmd.sampling import SamplingOptions
 

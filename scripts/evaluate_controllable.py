@@ -20,8 +20,8 @@ import numpy as np
 
 from choreo.constraints import Constraints
 from choreo.datasets import TEST, TRAIN, load_dataset
-from choreo.metrics import Dance, score, scoring_windows, windows_as_dances
-from choreo.metrics.protocol import fmt, music_beats
+from choreo.metrics import Dance
+from choreo.metrics.protocol import fmt, music_beats, score, scoring_windows, windows_as_dances
 from choreo.skeleton import LOWER_BODY_JOINTS, PARENTS, UPPER_BODY_JOINTS
 from choreo_sgmd.evaluation import generate_window_motions
 from choreo_sgmd.generator import SGMDGenerator

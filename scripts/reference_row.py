@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from choreo.datasets import TEST, TRAIN, load_dataset
-from choreo.metrics import TABLE_HEADER, score, table_row, windows_as_dances
+from choreo.metrics.protocol import TABLE_HEADER, score, table_row, windows_as_dances
 
 REPO = Path(__file__).resolve().parents[1]
 

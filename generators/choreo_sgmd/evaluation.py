@@ -18,24 +18,19 @@ from choreo.motion import Motion, vector_to_motion
 
 from .generator import SGMDGenerator
 from .sampling import Inpainting, SamplingOptions, sample_independent
-from .style import resolve_style
 
 
-def window_styles(generator: SGMDGenerator, genres: Sequence[str | None]) -> tuple[torch.Tensor, torch.Tensor]:
+def genre_styles(generator: SGMDGenerator, genres: Sequence[str | None]) -> tuple[torch.Tensor, torch.Tensor]:
     """Style vectors (N, S) and keep flags (N,) for per-window genres (None: no style)."""
-    vectors, keep = [], []
-    for genre in genres:
-        style = resolve_style(genre, generator.prompt_kind)
-        vectors.append(np.zeros(generator.model_config.style_dim, np.float32) if style.vector is None else style.vector)
-        keep.append(style.vector is not None)
-    return torch.from_numpy(np.stack(vectors)).float(), torch.tensor(keep)
+    resolved = [generator.style_vector(genre) for genre in genres]
+    return torch.stack([vector for vector, _ in resolved]), torch.tensor([s.vector is not None for _, s in resolved])
 
 
 def generate_window_motions(generator: SGMDGenerator, windows: Sequence, options: SamplingOptions,
                             with_style: bool = True, constraints: Sequence[Constraints] | None = None) -> list[Motion]:
     """A generated motion for every scoring window (under that window's constraints, if given)."""
     music = generator.music_scaler(torch.from_numpy(np.stack([w.features for w in windows])).float())
-    styles, keep = window_styles(generator, [w.genre if with_style else None for w in windows])
+    styles, keep = genre_styles(generator, [w.genre if with_style else None for w in windows])
     inpainting, values, mask = None, None, None
     if constraints is not None:
         values, mask = (np.stack(parts) for parts in zip(*(c.frame_vectors() for c in constraints)))

@@ -20,7 +20,7 @@ from .model import Denoiser
 from .normalizer import Normalizer
 from .sampling import Inpainting, SamplingOptions, sample_long
 from .schedule import NoiseSchedule
-from .style import resolve_style
+from .style import Style, resolve_style
 
 
 class SGMDGenerator(Generator):
@@ -73,21 +73,28 @@ class SGMDGenerator(Generator):
         }  # fmt: skip
         return motion
 
+    def style_vector(self, prompt: str | None) -> tuple[torch.Tensor, Style]:
+        """The (S,) vector the model reads for one prompt (zeros where no style is given) and what it
+        resolved to."""
+        style = resolve_style(prompt, self.prompt_kind)
+        if style.vector is None:
+            return torch.zeros(self.model_config.style_dim), style
+        return torch.from_numpy(style.vector).float(), style
+
     def style_conditioning(self, prompt: str | None, num_frames: int, fps: float):
         """(style (1 or T, S), keep (bool or (T,)), genres, notices) for a prompt or a time schedule."""
         schedule = parse_style_schedule(prompt, num_frames / fps) if prompt else None
         if schedule is None:
-            style = resolve_style(prompt, self.prompt_kind)
-            vector = torch.zeros(1, self.model_config.style_dim) if style.vector is None else torch.from_numpy(style.vector)[None].float()
-            return vector, style.vector is not None, [style.genre], [style.notice] if style.notice else []
+            vector, style = self.style_vector(prompt)
+            return vector[None], style.vector is not None, [style.genre], [style.notice] if style.notice else []
         per_frame = torch.zeros(num_frames, self.model_config.style_dim)
         keep = torch.zeros(num_frames, dtype=torch.bool)
         genres, notices = [], []
         for start, stop, text in schedule:
-            style = resolve_style(text, self.prompt_kind)
+            vector, style = self.style_vector(text)
             frames = slice(round(start * fps), num_frames if stop is None else round(stop * fps))
             if style.vector is not None:
-                per_frame[frames] = torch.from_numpy(style.vector).float()
+                per_frame[frames] = vector
                 keep[frames] = True
             genres.append(style.genre)
             notices += [style.notice] if style.notice else []

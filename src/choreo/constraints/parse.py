@@ -56,8 +56,7 @@ SCHEDULE_ENTRY = re.compile(r"^\s*([0-9.]*)\s*:\s*([0-9.]*)\s*=\s*(.+?)\s*$")
 def parse_style_schedule(text: str, duration: float) -> list[tuple[float, float | None, str]] | None:
     """'0:30=waltz,30:=cha-cha' -> [(0, 30, 'waltz'), (30, None, 'cha-cha')] (seconds); None if
     ``text`` is a plain style (no 'START:END=' entries). Ranges must not overlap."""
-    entries = [part for part in text.split(",")]
-    matches = [SCHEDULE_ENTRY.match(part) for part in entries]
+    matches = [SCHEDULE_ENTRY.match(part) for part in text.split(",")]
     if not any(matches):
         return None
     if not all(matches):

@@ -1,4 +1,8 @@
-"""The field's dance metrics: BeatAlign, PFC, FID_k/FID_g, Div_k/Div_g, beat distances."""
+"""The field's dance metrics: BeatAlign, PFC, FID_k/FID_g, Div_k/Div_g, beat distances.
+
+The scoring protocol on datasets (`choreo.metrics.protocol`) is imported on its own: it needs the
+dataset readers, which the metrics themselves do not.
+"""
 
 from .beats import MetricWarning, beat_align_score, beat_distances, mean_joint_speed, motion_beats
 from .evaluate import Dance, DanceScore, EvaluationReport, evaluate, resample_positions
@@ -6,12 +10,10 @@ from .fid import diversity, frechet_distance, motion_features, normalise_by_refe
 from .geometric import geometric_features
 from .kinetic import kinetic_features
 from .pfc import foot_contact_score, physical_foot_contact
-from .protocol import SCORING_WINDOWS, TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
 
 __all__ = [
     "Dance", "DanceScore", "EvaluationReport", "MetricWarning", "beat_align_score", "beat_distances",
     "diversity", "evaluate", "foot_contact_score", "frechet_distance", "geometric_features", "kinetic_features",
     "mean_joint_speed", "motion_beats", "motion_features", "normalise_by_reference", "physical_foot_contact",
-    "prepare_positions", "resample_positions", "SCORING_WINDOWS", "TABLE_HEADER", "score", "scoring_windows",
-    "table_row", "windows_as_dances",
+    "prepare_positions", "resample_positions",
 ]  # fmt: skip
