@@ -44,7 +44,7 @@ def score(dances: Sequence[Dance], ground_truth: Sequence[Dance]) -> EvaluationR
 
 
 def fmt(value) -> str:
-    return "-" if value is None else f"{value:.3f}"
+    return "-" if value is None else f"{0.0 if abs(value) < 5e-4 else value:.3f}"  # no "-0.000"
 
 
 def table_row(label: str, report: EvaluationReport) -> str:
