@@ -13,14 +13,11 @@
 from __future__ import annotations
 
 import argparse
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-import soundfile as sf
 import torch
 
 from choreo.generator import GenerationRequest
@@ -28,22 +25,8 @@ from choreo.music import Music
 from choreo_sgmd import DEFAULT_CHECKPOINT
 from choreo_sgmd.generator import SGMDGenerator
 
-REPO = Path(__file__).resolve().parents[1]
-EXAMPLE = REPO / "examples" / "drum_and_bass_174bpm.wav"
-TARGET_SECONDS = 3.0
-
-RSS_PROBE = """
-import resource, sys
-from choreo.cli import main
-code = main(["generate", sys.argv[1], "-o", sys.argv[2], "--style", "cha-cha"])
-print(code, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
-"""
-
-
-def song_of(seconds: float) -> tuple[np.ndarray, int]:
-    audio, rate = sf.read(EXAMPLE, dtype="float32")
-    repeats = int(np.ceil(seconds * rate / len(audio)))
-    return np.tile(audio, repeats)[: int(seconds * rate)], rate
+sys.path.insert(0, str(Path(__file__).parent))
+from common import REPO, TARGET_SECONDS, cli_peak_rss, song_of, write_song  # noqa: E402
 
 
 def speed(generator: SGMDGenerator, steps_list: list[int]) -> None:
@@ -71,17 +54,9 @@ def memory(minutes: list[float]) -> None:
     print("| --- | ---: | ---: |")
     with tempfile.TemporaryDirectory() as folder:
         for seconds in (60.0 * m for m in minutes):
-            audio, rate = song_of(seconds)
-            song = Path(folder) / f"song{seconds:.0f}.wav"
-            sf.write(song, audio, rate)
-            started = time.perf_counter()
-            result = subprocess.run([sys.executable, "-c", RSS_PROBE, str(song), str(Path(folder) / "out.npz")],
-                                    capture_output=True, text=True)
-            wall = time.perf_counter() - started
-            code, rss = result.stdout.split()[-2:]
-            if code != "0":
-                raise SystemExit(f"generate failed: {result.stderr}")
-            print(f"| {seconds / 60:g} min | {float(rss):.0f} | {wall:.1f} |", flush=True)
+            song = write_song(Path(folder), seconds)
+            rss, wall = cli_peak_rss(["generate", song, "-o", Path(folder) / "out.npz", "--style", "cha-cha"])
+            print(f"| {seconds / 60:g} min | {rss:.0f} | {wall:.1f} |", flush=True)
 
 
 def quality(checkpoint: Path, steps_list: list[int]) -> None:

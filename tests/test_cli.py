@@ -11,7 +11,8 @@ from choreo.motion import Motion
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE_SONG = REPO / "examples" / "drum_and_bass_174bpm.wav"
 AISTPP_FIXTURES = REPO / "tests" / "fixtures" / "aistpp"
-COMMANDS = ["info", "convert", "generators", "prepare", "eval", "train", "generate", "inbetween", "inpaint", "trajectory"]
+COMMANDS = ["info", "convert", "generators", "prepare", "eval", "train", "generate", "inbetween", "inpaint", "trajectory",
+            "render", "graph"]
 
 
 def run_cli(capsys, *args):
@@ -55,7 +56,22 @@ def test_generators_lists_both_backends_and_which_is_ready(capsys):
     code, out, _ = run_cli(capsys, "generators")
     assert code == 0
     rows = {line.split("│")[1].strip(): line for line in out.splitlines() if line.count("│") > 2}
-    assert "yes" in rows["sgmd"] and "placeholder" in rows["graph"]
+    assert "yes" in rows["sgmd"] and "yes" in rows["graph"]
+
+
+def test_graph_with_the_bundled_models_and_repertoire(tmp_path, capsys):
+    from choreo.formats import read_motion
+
+    code, _, err = run_cli(capsys, "graph", EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", "-k", "16")
+    assert code == 0, err
+    motion = read_motion(tmp_path / "dance.bvh")
+    import soundfile as sf
+
+    assert abs(motion.duration - sf.info(str(EXAMPLE_SONG)).duration) < 0.1
+    root_step = np.linalg.norm(np.diff(motion.root_positions, axis=0), axis=-1).max()
+    assert root_step < 0.1  # metres per frame: seams are placed where the dancer is, no teleporting
+    code, _, err = run_cli(capsys, "graph", EXAMPLE_SONG, "-o", tmp_path / "x.bvh", "--style", "hip-hop")
+    assert code == 2 and "repertoire genre" in err and not (tmp_path / "x.bvh").exists()
 
 
 def test_generate_with_the_bundled_model_and_no_flags(tmp_path, capsys):

@@ -197,3 +197,23 @@ def test_z_up_and_y_up_give_the_same_numbers():
     for y, z in zip(dances, z_up):
         assert foot_contact_score(y, up_axis="y") == pytest.approx(foot_contact_score(z, up_axis="z"), rel=1e-9)
         np.testing.assert_array_equal(motion_beats(y), motion_beats(z))
+
+
+def test_genre_classifier_tells_fast_from_slow_dances():
+    from choreo.metrics.genre import GenreClassifier
+
+    rng = np.random.default_rng(0)
+    t = np.arange(150) / 30
+    body = rng.normal(size=(1, 24, 3)) * 0.3
+
+    def dance(speed):
+        positions = np.tile(body, (150, 1, 1))
+        positions[:, 20:22, 1] += 0.4 * np.sin(2 * np.pi * speed * t + rng.uniform(0, 6))[:, None]
+        return positions + rng.normal(scale=0.01, size=positions.shape)
+
+    train = [dance(0.5) for _ in range(30)] + [dance(3.0) for _ in range(10)]
+    labels = ["slow"] * 30 + ["fast"] * 10
+    classifier = GenreClassifier.fit(train, labels)
+    assert classifier.agreement([dance(0.5) for _ in range(5)] + [dance(3.0) for _ in range(5)],
+                                ["slow"] * 5 + ["fast"] * 5) >= 0.9
+    assert classifier.agreement([dance(3.0)], ["slow"]) == 0.0

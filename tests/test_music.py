@@ -186,3 +186,18 @@ def test_memory_is_flat_in_song_length(tmp_path):
         rss[minutes] = int(out.stdout.strip()) / 1024  # MiB
     # Features for 40 min are 72000 x 35 float32 = 10 MB; allow that plus slack, not the 210 MB of audio.
     assert rss[40] - rss[4] < 60, rss
+
+
+def test_streamed_log_mel_equals_the_whole_signal_computation():
+    import librosa
+
+    from choreo.music.mel import DB_FLOOR, N_FFT, stream_log_mel
+
+    rng = np.random.default_rng(0)
+    signal = (0.1 * rng.standard_normal(SAMPLE_RATE * 3 + 123)).astype(np.float32)
+    mel = librosa.feature.melspectrogram(y=signal, sr=SAMPLE_RATE, n_fft=N_FFT, hop_length=512, n_mels=96)
+    expected = ((np.clip(librosa.power_to_db(mel, ref=1.0, amin=1e-10, top_db=None), DB_FLOOR, 0) - DB_FLOOR) / -DB_FLOOR).T
+    blocks = [signal[i : i + 5000] for i in range(0, len(signal), 5000)]  # blocks shorter than a window too
+    streamed = stream_log_mel(blocks)
+    assert streamed.shape == expected.shape == (1 + len(signal) // 512, 96)
+    np.testing.assert_allclose(streamed, expected, atol=1e-6)

@@ -1,13 +1,86 @@
-"""ChoreoGraph: style-selected, beat-warped dynamic motion graph, the `choreo graph` backend.
+"""ChoreoGraph (Chen et al.): style-selected, beat-warped dynamic motion graph, the `choreo graph` backend.
 
-Placeholder until the ChoreoGraph generator issue lands.
+The bundled models (``weights/graph-m2d.pt``) were trained on the M2D train split; the bundled
+repertoire (``weights/repertoire-sgmd.npz``) holds clips the bundled SGMD model generated, not
+M2D motion (which may not be redistributed). docs/graph.md has the commands for both.
 """
 
+from __future__ import annotations
+
+from pathlib import Path
+
 from choreo.generator import GeneratorPlugin
+
+WEIGHTS = Path(__file__).parent / "weights"
+DEFAULT_CHECKPOINT = WEIGHTS / "graph-m2d.pt"
+DEFAULT_REPERTOIRE = WEIGHTS / "repertoire-sgmd.npz"
+
+
+def train_from_dataset(data_dir: str | Path, out_dir: str | Path, max_steps: int | None = None,
+                       batch_size: int | None = None, seed: int | None = None, progress=None, load_progress=None,
+                       **sgmd_only) -> Path:
+    """Train the style encoders and tempo-density estimators on a dataset's train split (its test
+    split is reported as validation). ``max_steps`` sets every stage's step count."""
+    from dataclasses import replace
+
+    from choreo.datasets import TEST, TRAIN, load_dataset
+
+    from .config import CLIP_FRAMES, WINDOW_FRAMES, TrainConfig
+    from .data import clip_mel, paired_excerpts
+    from .training import STYLE_STRIDE, train_graph
+
+    given = {k: v for k, v in sgmd_only.items() if v not in (None, False, "cpu", "description")}
+    if given:
+        raise ValueError(f"option(s) {', '.join(sorted(given))} apply to sgmd, not to graph")
+    overrides = {"batch_size": batch_size, "seed": seed}
+    if max_steps is not None:
+        overrides |= {"style_steps": max_steps, "motion_tempo_steps": max_steps, "music_tempo_steps": max_steps}
+    config = replace(TrainConfig(), **{k: v for k, v in overrides.items() if v is not None})
+    clips = [c for c in load_dataset(data_dir, progress=load_progress) if c.audio_path]
+    mels = {c.name: clip_mel(c) for c in clips}
+    train = [c for c in clips if c.split in (TRAIN, None)]
+    test = [c for c in clips if c.split == TEST]
+
+    def excerpts(chosen):
+        return (paired_excerpts(chosen, WINDOW_FRAMES, STYLE_STRIDE, mels),
+                paired_excerpts(chosen, CLIP_FRAMES, config.clip_stride, mels))
+
+    style_data, clip_data = excerpts(train)
+    return train_graph(style_data, clip_data, excerpts(test) if test else None, out_dir, config=config, progress=progress)
+
+
+def build_repertoire_from_dataset(data_dir: str | Path, out: str | Path, checkpoint: str | Path = DEFAULT_CHECKPOINT,
+                                  split: str | None = "train", stride: int = 60, progress=None) -> Path:
+    """A repertoire of every 8 s clip (``stride`` frames apart) of a dataset split."""
+    from choreo.datasets import load_dataset, select_split
+
+    from .model import load_checkpoint
+    from .repertoire import build_repertoire
+
+    model, _ = load_checkpoint(checkpoint)
+    clips = select_split(load_dataset(data_dir), split)
+    motions = [(c.name, c.motion, c.genre) for c in clips]
+    repertoire = build_repertoire(motions, model, stride, f"{Path(data_dir).name} split {split or 'all'}", progress)
+    repertoire.save(out)
+    return Path(out)
+
+
+def build_generator(checkpoint: str | Path, repertoire: str | Path | None = None, **graph_options):
+    """The generator; ``graph_options`` are GraphConfig fields (top_k, dynamic, retempo...)."""
+    from .config import GraphConfig
+    from .generator import ChoreoGraphGenerator
+
+    return ChoreoGraphGenerator.from_files(checkpoint, repertoire, GraphConfig(**graph_options))
+
+
+_READY = DEFAULT_CHECKPOINT.is_file() and DEFAULT_REPERTOIRE.is_file()
 
 plugin = GeneratorPlugin(
     name="graph",
     summary="style embeddings + tempo-density DTW + dynamic motion graph (choreo graph)",
-    ready=False,
-    status="placeholder: style/tempo models, repertoire and graph search not implemented yet (ChoreoGraph issue)",
+    ready=_READY,
+    status="" if _READY else f"bundled models or repertoire missing under {WEIGHTS}; pass --checkpoint and --repertoire",
+    factory=build_generator,
+    train=train_from_dataset,
+    default_checkpoint=DEFAULT_CHECKPOINT,
 )

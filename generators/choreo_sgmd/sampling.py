@@ -8,7 +8,7 @@ network runs over the windows in chunks, so its activations do not grow with the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import torch
@@ -27,6 +27,7 @@ class SamplingOptions:
     eta: float = 1.0  # DDIM stochasticity: 1 as EDGE samples, 0 deterministic
     seed: int = 0
     chunk_windows: int = 32  # windows per network call
+    block_windows: int = 48  # windows denoised together (2 min of song); longer songs go block by block
 
 
 def window_starts(num_frames: int, window: int) -> list[int]:
@@ -126,7 +127,60 @@ def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torc
 
     ``style`` is (1, S) for the whole song or (T, S) per frame (a style schedule); ``keep_style``
     a bool or (T,) bools saying where a style is given at all.
+
+    Up to ``options.block_windows`` windows are denoised together. A longer song goes block by
+    block, each block opening with the previous block's last window as known frames (the same
+    masked sampling as a seed motion), so memory stays that of one block however long the song.
     """
+    num_frames = len(music)
+    starts = window_starts(num_frames, window)
+    blocks = block_ranges(len(starts), options.block_windows)
+    out = torch.full((num_frames, frame_dim), float("nan"))
+    evaluations = 0
+    for b, (first, last) in enumerate(blocks):
+        offset = starts[first]
+        stop = min(num_frames, starts[last - 1] + window)
+        known = _block_constraints(inpainting, out, offset, stop, window if b > 0 else 0)
+        report = None if progress is None else (lambda f, b=b: progress((b + f) / len(blocks)))
+        block_style, block_keep = (style, keep_style) if style.shape[0] == 1 else (
+            style[offset:stop], keep_style[offset:stop] if isinstance(keep_style, torch.Tensor) else keep_style)
+        block_options = options if b == 0 else replace(options, seed=options.seed * 1_000_003 + b)
+        out[offset:stop], evaluations = _sample_block(model, schedule, music[offset:stop], block_style, block_keep,
+                                                      frame_dim, window, block_options, report, known)
+    return out, evaluations
+
+
+def block_ranges(count: int, size: int) -> list[tuple[int, int]]:
+    """[first, last) window ranges of at most ``size`` windows, each sharing its first with the
+    previous range's last."""
+    if count <= size:
+        return [(0, count)]
+    ranges, first = [], 0
+    while True:
+        last = min(count, first + size)
+        ranges.append((first, last))
+        if last == count:
+            return ranges
+        first = last - 1
+
+
+def _block_constraints(inpainting: Inpainting | None, done: torch.Tensor, offset: int, stop: int,
+                       carried: int) -> Inpainting | None:
+    """The user's constraints on frames [offset, stop) plus the first ``carried`` frames as already sampled."""
+    if inpainting is None and carried == 0:
+        return None
+    if inpainting is None:
+        values, mask = torch.zeros(stop - offset, done.shape[1]), torch.zeros(stop - offset, done.shape[1], dtype=torch.bool)
+    else:
+        values, mask = inpainting.values[offset:stop].clone(), inpainting.mask[offset:stop].clone()
+    values[:carried], mask[:carried] = done[offset : offset + carried], True
+    return Inpainting(values, mask)
+
+
+@torch.no_grad()
+def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: torch.Tensor, keep_style,
+                  frame_dim: int, window: int, options: SamplingOptions,
+                  progress: Callable[[float], None] | None, inpainting: Inpainting | None) -> tuple[torch.Tensor, int]:
     num_frames = len(music)
     starts = window_starts(num_frames, window)
     music_windows = windowed(music, starts, window)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import copy
 import os
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Callable
 
@@ -21,6 +21,7 @@ import torch
 import torch.distributed as dist
 from torch.nn.parallel import DistributedDataParallel
 
+from choreo.generator import TrainProgress
 
 from .checkpoint import load_checkpoint, save_checkpoint
 from .config import DiffusionConfig, ModelConfig, TrainConfig
@@ -32,15 +33,6 @@ from .schedule import NoiseSchedule
 from .style import GENRES
 
 VALIDATION_WINDOWS = 64
-
-
-@dataclass
-class TrainProgress:
-    step: int
-    max_steps: int
-    loss: float
-    windows_per_second: float
-    validation_loss: float | None
 
 
 def _step_generator(seed: int, step: int) -> torch.Generator:

@@ -7,6 +7,7 @@ import typer
 from . import commands
 from .eval_command import evaluate
 from .generate_command import generate, inbetween, inpaint, trajectory
+from .graph_command import graph_app
 from .render_command import render
 from .train_command import train
 
@@ -31,3 +32,4 @@ app.command("prepare")(commands.prepare)
 app.command("eval")(evaluate)
 app.command("train")(train)
 app.command("render")(render)
+app.add_typer(graph_app, name="graph")

@@ -208,7 +208,7 @@ class Settings:
     preview: bool = False  # render an MP4 with the music beside the first output file
 
 
-def load_backend(settings: Settings):
+def load_backend(settings: Settings, **factory_options):
     from ..errors import ChoreoError
     from ..generator import available_plugins
 
@@ -220,7 +220,7 @@ def load_backend(settings: Settings):
         checkpoint = plugin.default_checkpoint
         if checkpoint is None or not Path(checkpoint).is_file():
             raise ChoreoError(f"{settings.generator} has no bundled checkpoint; pass --checkpoint")
-    return plugin.factory(checkpoint)
+    return plugin.factory(checkpoint, **factory_options)
 
 
 def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
@@ -261,10 +261,11 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         written.append(str(video))
     if written:
         kept = f", {100 * constraints.known_fraction():.0f} % of joint values given" if constraints else ""
+        how = (f"{meta.get('sampler')} {meta.get('steps')} steps, guidance {settings.guidance:g}, seed {settings.seed}"
+               if meta.get("sampler") else f"K = {meta.get('top_k')}, repertoire {meta.get('repertoire')}")
         stderr_console.print(
             f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at {motion.fps:g} fps "
-            f"({settings.generator}, {meta.get('sampler')} {meta.get('steps')} steps, guidance {settings.guidance:g}, "
-            f"seed {settings.seed}{kept}; {seconds:.1f} s)", highlight=False)
+            f"({settings.generator}, {how}{kept}; {seconds:.1f} s)", highlight=False)
     return {"song": str(song), "ok": True, "outputs": written, "seconds_of_dance": round(motion.duration, 3),
             "frames": motion.num_frames, "fps": motion.fps, "genre": meta.get("genre"), "seed": settings.seed,
             "steps": meta.get("steps"), "generation_seconds": round(seconds, 3)}

@@ -15,7 +15,7 @@ def train(
     data: Path = typer.Option(..., help="Dataset folder: M2D, AIST++ or BVH files with audio beside them."),
     out: Path = typer.Option(..., help="Folder for checkpoints (last.pt is rewritten atomically)."),
     config: str = typer.Option("cpu", help="Model configuration: cpu (default), small, paper, tiny."),
-    steps: Optional[int] = typer.Option(None, help="Train until this many optimiser steps."),
+    steps: Optional[int] = typer.Option(None, help="Train until this many optimiser steps (graph: steps of each of its three stages)."),
     batch_size: Optional[int] = typer.Option(None, help="Windows per step (default 32)."),
     prompt: str = typer.Option("description", help="Style prompt kind: description, name or onehot."),
     style_mode: Optional[str] = typer.Option(None, help="sgmd ablations: modulation (default), concat or none (EDGE)."),
@@ -29,6 +29,7 @@ def train(
       choreo train sgmd --data ../shared/data/m2d --out runs/sgmd --steps 8000
       choreo train sgmd --data ~/aistpp --config paper --out runs/paper --resume
       choreo train sgmd --data ../shared/data/m2d --out runs/edge --style-mode none --steps 2000
+      choreo train graph --data ../shared/data/m2d --out runs/graph --steps 1200
     """
     from ..errors import ChoreoError, ParameterError
     from ..generator import available_plugins
@@ -44,7 +45,8 @@ def train(
     with progress_bar(f"training {generator}") as update:
         def report(p):
             extra = f"loss {p.loss:.4f}" + (f", validation {p.validation_loss:.4f}" if p.validation_loss is not None else "")
-            update(p.step, p.max_steps, f"{extra}, {p.windows_per_second:.0f} windows/s")
+            stage = f"{p.stage}: " if p.stage else ""
+            update(p.step, p.max_steps, f"{stage}{extra}, {p.windows_per_second:.0f} windows/s")
 
         try:
             path = plugin.train(data, out, config=config, resume=resume, max_steps=steps, prompt_kind=prompt,

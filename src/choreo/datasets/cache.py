@@ -44,7 +44,8 @@ def cached_music(audio_path: str | os.PathLike, start: float | None = None, end:
         try:
             with np.load(entry) as data:
                 return Music(path=audio_path, duration=float(data["duration"]), fps=float(data["fps"]),
-                             features=data["features"], beat_times=data["beat_times"], tempo=float(data["tempo"]))
+                             features=data["features"], beat_times=data["beat_times"], tempo=float(data["tempo"]),
+                             start=start or 0.0)
         except (OSError, KeyError, ValueError):
             pass  # a damaged entry is recomputed below
     music = Music.from_file(audio_path, start=start, end=end)

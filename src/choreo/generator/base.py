@@ -37,6 +37,18 @@ class Generator(abc.ABC):
         """Dance to ``request.music``; ``progress`` receives the fraction done in [0, 1]."""
 
 
+@dataclass
+class TrainProgress:
+    """What a backend's training loop reports to `choreo train`'s progress bar."""
+
+    step: int
+    max_steps: int
+    loss: float
+    windows_per_second: float
+    validation_loss: float | None
+    stage: str = ""  # for backends trained in stages (e.g. "style", "tempo")
+
+
 @dataclass(frozen=True)
 class GeneratorPlugin:
     """What a backend package registers under the ``choreo.generators`` entry-point group."""

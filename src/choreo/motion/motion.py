@@ -159,16 +159,24 @@ class Motion:
             return self.replace(metadata=dict(self.metadata))
         num_frames = max(1, int(round(self.num_frames * fps / self.fps)))
         source_time = np.arange(num_frames) * self.fps / fps  # in source frames
-        source_time = np.clip(source_time, 0, self.num_frames - 1)
+        return self.sample_frames(source_time).replace(fps=float(fps))
+
+    def sample_frames(self, source_frames: np.ndarray) -> "Motion":
+        """Frames at fractional source indices (clamped to the clip): linear root, slerped rotations.
+
+        The building block of resampling and of time-warping (a warped clip is its frames read
+        at a non-uniform pace).
+        """
+        source_time = np.clip(np.asarray(source_frames, dtype=np.float64), 0, self.num_frames - 1)
         lower = np.floor(source_time).astype(int)
         upper = np.minimum(lower + 1, self.num_frames - 1)
         weight = source_time - lower
         root = (1 - weight)[:, None] * self.root_positions[lower] + weight[:, None] * self.root_positions[upper]
         rotations = rot.quaternion_slerp(
             self.rotations[lower], self.rotations[upper],
-            np.broadcast_to(weight[:, None], (num_frames, self.num_joints)).copy(),
+            np.broadcast_to(weight[:, None], (len(source_time), self.num_joints)).copy(),
         )
-        return self.replace(root_positions=root, rotations=rotations, fps=float(fps), metadata=dict(self.metadata))
+        return self.replace(root_positions=root, rotations=rotations, metadata=dict(self.metadata))
 
     def translated(self, offset: Sequence[float]) -> "Motion":
         return self.replace(root_positions=self.root_positions + np.asarray(offset, dtype=np.float64))

@@ -25,6 +25,7 @@ class Music:
         features: (T, 35) float32, T = floor(duration * fps); see choreo.music.features for columns.
         beat_times: (B,) seconds from the start of the excerpt.
         tempo: estimated global tempo in beats per minute (0 when no beat was found).
+        start: seconds into ``path`` at which frame 0 is (an excerpt's start).
     """
 
     path: Path | None
@@ -33,6 +34,7 @@ class Music:
     features: np.ndarray
     beat_times: np.ndarray
     tempo: float
+    start: float = 0.0  # seconds into ``path`` at which frame 0 is
 
     @property
     def num_frames(self) -> int:
@@ -74,7 +76,7 @@ class Music:
         blocks = iter_audio_blocks(path, SAMPLE_RATE, start, end)
         features, tempo, beat_frames = stream_features(blocks, str(path), progress=report)
         return cls(path=path, duration=_duration(features), fps=float(FPS),
-                   features=features, beat_times=beat_frames / FPS, tempo=tempo)
+                   features=features, beat_times=beat_frames / FPS, tempo=tempo, start=start or 0.0)
 
     @classmethod
     def from_array(cls, samples: np.ndarray, sr: int) -> "Music":

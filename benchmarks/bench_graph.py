@@ -1,0 +1,76 @@
+"""How fast and how big is ChoreoGraph generation on this CPU?
+
+    python benchmarks/bench_graph.py [--top-k 64 128 256 512] [--seconds 10 60 300] [--memory-minutes 1 5 10]
+
+1. Speed: seconds to dance 10 s, 60 s and 5 min of music (the example loop tiled) for each K,
+   with the bundled models and repertoire; the log-mel analysis is timed on its own column (the
+   35-d feature analysis every command runs first is not included, as in bench_sgmd).
+2. Memory: peak RSS of a whole `choreo graph` run (fresh process, default settings) per song length.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import torch
+
+from choreo.generator import GenerationRequest
+from choreo.music import Music
+from choreo.music.mel import music_log_mel
+from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE
+from choreo_graph.config import GraphConfig
+from choreo_graph.generator import ChoreoGraphGenerator
+
+sys.path.insert(0, str(Path(__file__).parent))
+from common import TARGET_SECONDS, cli_peak_rss, write_song  # noqa: E402
+
+
+def speed(generator: ChoreoGraphGenerator, top_ks: list[int], durations: list[float], folder: Path) -> None:
+    print(f"\n## Speed ({torch.get_num_threads()} threads, repertoire of {len(generator.repertoire)} clips)\n")
+    print("| song | K | log-mel (s) | dance (s) | total (s) | x 3 s target (60 s song) |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    for seconds in durations:
+        music = Music.from_file(write_song(folder, seconds))
+        started = time.perf_counter()
+        music_log_mel(music)
+        mel_seconds = time.perf_counter() - started
+        for top_k in top_ks:
+            generator.config = GraphConfig(top_k=top_k)
+            started = time.perf_counter()
+            generator.generate(GenerationRequest(music))
+            total = time.perf_counter() - started
+            ratio = f"{total / TARGET_SECONDS:.2f}" if seconds == 60 else "-"
+            print(f"| {seconds:g} s | {top_k} | {mel_seconds:.2f} | {total - mel_seconds:.2f} | {total:.2f} | {ratio} |",
+                  flush=True)
+
+
+def memory(minutes: list[float], folder: Path) -> None:
+    print("\n## Peak memory of `choreo graph` (fresh process, default settings)\n")
+    print("| song | peak RSS (MiB) | wall (s) |")
+    print("| --- | ---: | ---: |")
+    for seconds in (60.0 * m for m in minutes):
+        rss, wall = cli_peak_rss(["graph", write_song(folder, seconds), "-o", folder / "out.npz"])
+        print(f"| {seconds / 60:g} min | {rss:.0f} | {wall:.1f} |", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--checkpoint", type=Path, default=DEFAULT_CHECKPOINT)
+    parser.add_argument("--repertoire", type=Path, default=DEFAULT_REPERTOIRE)
+    parser.add_argument("--top-k", type=int, nargs="+", default=[64, 128, 256, 512])
+    parser.add_argument("--seconds", type=float, nargs="+", default=[10, 60, 300])
+    parser.add_argument("--memory-minutes", type=float, nargs="*", default=[1, 10])
+    args = parser.parse_args()
+    generator = ChoreoGraphGenerator.from_files(args.checkpoint, args.repertoire)
+    with tempfile.TemporaryDirectory() as folder:
+        speed(generator, args.top_k, args.seconds, Path(folder))
+        if args.memory_minutes:
+            memory(args.memory_minutes, Path(folder))
+
+
+if __name__ == "__main__":
+    main()

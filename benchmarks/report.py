@@ -1,0 +1,231 @@
+"""The quality, style-adherence, speed and memory report of both generators, in one command.
+
+    python benchmarks/report.py [--out docs/report.md] [--edge checkpoints/sgmd-edge-m2d.pt] [--quick]
+
+On the M2D test split (213 windows of 5 s, scored against the train split as the reference row):
+ground truth; a nearest-neighbour retrieval baseline (the train window whose music features are
+closest, its motion played as is); SGMD without style (a model trained without any style input,
+the EDGE-equivalent ablation); the bundled SGMD at guidance 1 and 2; ChoreoGraph with the bundled
+models and a repertoire cut from the M2D train split. Style adherence: a genre classifier trained
+on real train windows, its accuracy on real test windows, then the share of each method's windows
+it recognises as the genre asked for. Then speed and peak memory of both generators for 10 s,
+60 s and 10 min songs. Writes the markdown report and its plots (``--out`` folder + report/).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from choreo.datasets import TEST, TRAIN, load_dataset
+from choreo.generator import GenerationRequest
+from choreo.metrics import Dance
+from choreo.metrics.genre import GenreClassifier
+from choreo.metrics.protocol import TABLE_HEADER, music_beats, score, scoring_windows, table_row, windows_as_dances
+from choreo.music import Music
+
+sys.path.insert(0, str(Path(__file__).parent))
+from common import REPO, cli_peak_rss, write_song  # noqa: E402
+
+EDGE_CHECKPOINT = REPO / "checkpoints" / "sgmd-edge-m2d.pt"
+
+
+def retrieval_dances(train_windows, test_windows) -> list[Dance]:
+    """For each test window, the train window with the closest music (standardised 35-d features)."""
+    train_music = np.stack([w.features.reshape(-1) for w in train_windows])
+    mean, std = train_music.mean(0), train_music.std(0) + 1e-6
+    bank = (train_music - mean) / std
+    dances = []
+    for w in test_windows:
+        nearest = int(np.argmin(np.square(bank - (w.features.reshape(-1) - mean) / std).sum(1)))
+        dances.append(Dance(f"{w.clip}@{w.start_frame}", train_windows[nearest].motion.joint_positions(),
+                            music_beats(w.features)))
+    return dances
+
+
+def sgmd_dances(checkpoint: Path, windows, guidance: float, with_style: bool) -> list[Dance]:
+    from choreo_sgmd.evaluation import generate_window_dances
+    from choreo_sgmd.generator import SGMDGenerator
+    from choreo_sgmd.sampling import SamplingOptions
+
+    return generate_window_dances(SGMDGenerator(checkpoint), windows, SamplingOptions(guidance=guidance), with_style)
+
+
+def graph_dances(train_clips, test_clips, windows) -> list[Dance]:
+    from choreo_graph import DEFAULT_CHECKPOINT
+    from choreo_graph.config import GraphConfig
+    from choreo_graph.data import clip_mel
+    from choreo_graph.generator import ChoreoGraphGenerator
+    from choreo_graph.model import load_checkpoint
+    from choreo_graph.repertoire import build_repertoire
+
+    model, _ = load_checkpoint(DEFAULT_CHECKPOINT)
+    repertoire = build_repertoire([(c.name, c.motion, c.genre) for c in train_clips], model, 60, "M2D train")
+    generator = ChoreoGraphGenerator(model, repertoire)
+    mels = {c.name: clip_mel(c) for c in test_clips}
+    dances = []
+    for w in windows:
+        mel = mels[w.clip][w.start_frame : w.start_frame + len(w.features)]
+        motion = generator.dance(mel, GraphConfig())
+        dances.append(Dance(f"{w.clip}@{w.start_frame}", motion.joint_positions(), music_beats(w.features)))
+    return dances
+
+
+def speed_and_memory(durations: list[float], folder: Path) -> list[tuple]:
+    """(generator, song seconds, generation seconds, peak RSS MiB of the whole CLI run) per case."""
+    from choreo_graph.generator import ChoreoGraphGenerator
+    from choreo_sgmd.generator import SGMDGenerator
+    import choreo_graph
+    import choreo_sgmd
+
+    generators = {"sgmd": SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT),
+                  "graph": ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT)}
+    rows = []
+    for seconds in durations:
+        song = write_song(folder, seconds)
+        music = Music.from_file(song)
+        for name, generator in generators.items():
+            started = time.perf_counter()
+            generator.generate(GenerationRequest(music, style="cha-cha" if name == "sgmd" else None))
+            took = time.perf_counter() - started
+            command = ["generate", song, "-o", folder / "out.npz", "--style", "cha-cha"] if name == "sgmd" else \
+                ["graph", song, "-o", folder / "out.npz"]
+            rss, wall = cli_peak_rss(command)
+            rows.append((name, seconds, took, rss, wall))
+            print(f"  {name} {seconds:g} s: {took:.2f} s, {rss:.0f} MiB", flush=True)
+    return rows
+
+
+def plot_quality(rows: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(rows)
+    figure, axes = plt.subplots(1, 3, figsize=(13, 3.6), dpi=110)
+    for ax, (metric, label) in zip(axes, [("fid_k", "FID_k (lower is better)"), ("fid_g", "FID_g (lower is better)"),
+                                          ("beat_align", "BeatAlign (real = dashed)")]):
+        values = [getattr(rows[n], metric) for n in names]
+        ax.barh(names, values, color=["#888" if n.startswith("real") else "#3a6fd8" for n in names])
+        ax.set_title(label, fontsize=10)
+        if metric == "beat_align":
+            ax.axvline(getattr(rows[names[0]], metric), color="#eb802a", linestyle="--")
+        ax.invert_yaxis()
+        if ax is not axes[0]:
+            ax.set_yticklabels([])
+    figure.tight_layout()
+    figure.savefig(path)
+    plt.close(figure)
+
+
+def plot_speed(rows: list[tuple], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(1, 2, figsize=(10, 3.4), dpi=110)
+    for name, color in (("sgmd", "#3a6fd8"), ("graph", "#eb802a")):
+        mine = [r for r in rows if r[0] == name]
+        axes[0].plot([r[1] / 60 for r in mine], [r[2] for r in mine], "o-", color=color, label=name)
+        axes[1].plot([r[1] / 60 for r in mine], [r[3] for r in mine], "o-", color=color, label=name)
+    axes[0].set(xlabel="song (min)", ylabel="generation (s)", title="time to dance")
+    axes[1].set(xlabel="song (min)", ylabel="peak RSS (MiB)", title="memory of a whole CLI run")
+    for ax in axes:
+        ax.legend()
+        ax.grid(alpha=0.3)
+    figure.tight_layout()
+    figure.savefig(path)
+    plt.close(figure)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
+    parser.add_argument("--out", type=Path, default=REPO / "docs" / "report.md")
+    parser.add_argument("--edge", type=Path, default=EDGE_CHECKPOINT)
+    parser.add_argument("--durations", type=float, nargs="+", default=[10, 60, 600])
+    args = parser.parse_args()
+    import choreo_sgmd
+
+    torch.manual_seed(0)
+    started = time.perf_counter()
+    clips = load_dataset(args.data)
+    train = [c for c in clips if c.split == TRAIN]
+    test = [c for c in clips if c.split == TEST]
+    windows, train_windows = scoring_windows(test), scoring_windows(train)
+    reference = windows_as_dances(train)
+    genres = [w.genre for w in windows]
+
+    print("quality...", flush=True)
+    sets = {"real test motion (the reference)": windows_as_dances(test),
+            "retrieval baseline (nearest train music)": retrieval_dances(train_windows, windows)}
+    if args.edge.is_file():
+        sets["SGMD without style (EDGE-equivalent, trained without style)"] = sgmd_dances(args.edge, windows, 2.0, False)
+    sets["SGMD bundled, guidance 1"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, windows, 1.0, True)
+    sets["SGMD bundled, guidance 2 (default)"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, windows, 2.0, True)
+    sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, [c for c in test if c.audio_path], windows)
+    reports = {name: score(dances, reference) for name, dances in sets.items()}
+
+    print("style adherence...", flush=True)
+    classifier = GenreClassifier.fit([w.motion.joint_positions() for w in train_windows], [w.genre for w in train_windows])
+    adherence = {name: classifier.agreement([d.positions for d in dances], genres) for name, dances in sets.items()}
+
+    print("speed and memory...", flush=True)
+    with tempfile.TemporaryDirectory() as folder:
+        speed_rows = speed_and_memory(args.durations, Path(folder))
+
+    plots = args.out.parent / "report"
+    plots.mkdir(parents=True, exist_ok=True)
+    plot_quality(reports, plots / "quality.png")
+    plot_speed(speed_rows, plots / "speed.png")
+    lines = [
+        "# Report: both generators on M2D, side by side",
+        "",
+        f"Generated by `python benchmarks/report.py` in {time.perf_counter() - started:.0f} s on this machine "
+        f"({torch.get_num_threads()} threads); every number below comes from that run.",
+        "",
+        "## Quality (M2D test split, 5 s windows every 2.5 s, 30 fps, scored against the train split)",
+        "",
+        TABLE_HEADER.format(label="method"),
+        *(table_row(name, report) for name, report in reports.items()),
+        "",
+        "![FID and BeatAlign per method](report/quality.png)",
+        "",
+        "## Style adherence (genre classifier on motion)",
+        "",
+        f"A logistic-regression classifier on the FID features of real M2D train windows "
+        f"({len(train_windows)} windows, genres {', '.join(classifier.genres)}). Share of windows recognised as "
+        "the genre of the test clip they were danced for (the genre each method was asked for):",
+        "",
+        "| method | recognised as the requested genre |",
+        "| --- | ---: |",
+        *(f"| {name} | {100 * value:.1f} % |" for name, value in adherence.items()),
+        "",
+        "The first row is the classifier's accuracy on real test windows: the ceiling the others are read against.",
+        "",
+        "## Speed and memory",
+        "",
+        "Songs are the example loop tiled to length. Generation: seconds inside one process after the music",
+        "analysis; peak RSS: a whole `choreo generate` / `choreo graph` run in a fresh process.",
+        "",
+        "| generator | song | generation (s) | peak RSS (MiB) | whole CLI run (s) |",
+        "| --- | ---: | ---: | ---: | ---: |",
+        *(f"| {name} | {seconds:g} s | {took:.2f} | {rss:.0f} | {wall:.1f} |" for name, seconds, took, rss, wall in speed_rows),
+        "",
+        "![time and memory against song length](report/speed.png)",
+        "",
+    ]
+    args.out.write_text("\n".join(lines))
+    print(f"wrote {args.out} and {plots}/")
+
+
+if __name__ == "__main__":
+    main()

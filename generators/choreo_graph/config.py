@@ -1,0 +1,88 @@
+"""ChoreoGraph configuration: sizes of the learnt parts, search weights and training budgets.
+
+Times are in motion frames at 30 fps (the paper works at 20 fps motion / 60 fps mel; here every
+sequence is at the motion rate so no model has to re-time its input). The networks are the
+paper's shapes (conv/graph-conv blocks + GRU + linear; transformer + conv + deconv) at widths a
+2-core CPU trains in minutes; the search constants are the paper's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+FPS = 30
+NODE_FRAMES = FPS  # a graph node is one second of motion
+WINDOW_FRAMES = 4 * FPS  # style and music tempo-density look at 4 s
+CLIP_FRAMES = 8 * FPS  # repertoire clips are 8 s; their middle 4 s carry the style
+NUM_JOINTS = 24
+
+
+@dataclass(frozen=True)
+class StyleConfig:
+    """Music and motion style encoders (paper 3.1) and the motion-beat-count predictor."""
+
+    style_dim: int = 32
+    n_mels: int = 96
+    music_channels: tuple[int, ...] = (16, 32, 32, 48)  # four conv blocks
+    motion_channels: tuple[int, ...] = (16, 32, 32, 48)  # four graph-conv blocks
+    gru_hidden: int = 64
+    gru_layers: int = 2
+    beat_hidden: int = 64
+    style_weight: float = 1.0  # lambda_es in eq. 1
+    beat_weight: float = 0.1  # lambda_b in eq. 1
+    contrast_weight: float = 1.0  # see losses.style_loss: eq. 1 alone is solved by a constant
+    temperature: float = 1.0
+
+
+@dataclass(frozen=True)
+class TempoConfig:
+    """Tempo-density estimators (paper 3.2)."""
+
+    width: int = 64
+    content_dim: int = 128
+    heads: int = 4
+    music_layers: int = 2
+    max_shift: int = 6  # frames the random time-warper moves a beat (0.2 s)
+    content_weight: float = 1.0  # lambda_cm in eq. 2
+
+
+@dataclass(frozen=True)
+class GraphConfig:
+    """Selection, warping and the dynamic graph (paper 3.1-3.3)."""
+
+    top_k: int = 512  # candidates per 4 s music window (the paper's K)
+    style_cost: float = 1.0  # lambda_s in eq. 4
+    completeness_cost: float = 1.0  # lambda_c
+    transition_cost: float = 4.0  # lambda_t (per squared metre of mean joint distance)
+    completeness_scale: float = 5.0  # frames: the sigmoid's width in eq. 6
+    dtw_stride: int = 2  # warp on every 2nd frame (15 fps), then interpolate the path
+    blend_frames: int = 6  # cross-fade length where the graph jumps between segments
+    dynamic: bool = True  # False: the paper's Motion Graph ablation (first node of each segment only)
+    retempo: bool = True  # False: the "without re-tempo" ablation (middle 4 s, unwarped)
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    batch_size: int = 32
+    learning_rate: float = 1e-3
+    style_steps: int = 3000
+    motion_tempo_steps: int = 3000
+    music_tempo_steps: int = 2000
+    clip_stride: int = FPS  # 8 s training pairs start every second
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    style: StyleConfig = field(default_factory=StyleConfig)
+    tempo: TempoConfig = field(default_factory=TempoConfig)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "ModelConfig":
+        style = dict(data["style"])
+        for key in ("music_channels", "motion_channels"):
+            style[key] = tuple(style[key])
+        return cls(StyleConfig(**style), TempoConfig(**data["tempo"]))

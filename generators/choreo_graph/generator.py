@@ -1,0 +1,102 @@
+"""`ChoreoGraphGenerator`: music in, a dance assembled from the repertoire out."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from choreo.errors import ParameterError
+from choreo.generator import GenerationRequest, Generator
+from choreo.motion import Motion
+from choreo.music.mel import music_log_mel
+
+from .config import NODE_FRAMES, GraphConfig
+from .graph import DynamicGraph, assemble, music_windows, select_candidates, warp_candidates
+from .model import ChoreoGraphModel, load_checkpoint
+from .repertoire import Repertoire
+
+CHUNK_SECONDS = 32  # seconds of the song selected and warped at once (bounds memory)
+GENERIC_OPTIONS = {"guidance", "sampler", "steps"}  # the diffusion commands' options: meaningless here
+
+
+class ChoreoGraphGenerator(Generator):
+    name = "graph"
+
+    def __init__(self, model: ChoreoGraphModel, repertoire: Repertoire, config: GraphConfig = GraphConfig(),
+                 names: tuple[str, str] = ("", "")):
+        if repertoire.style.shape[1] != model.config.style.style_dim:
+            raise ParameterError("the repertoire was described by another model (style size differs); rebuild it")
+        self.model, self.repertoire, self.config = model, repertoire, config
+        self.checkpoint_name, self.repertoire_name = names
+
+    @classmethod
+    def from_files(cls, checkpoint: str | Path, repertoire: str | Path | None = None,
+                   config: GraphConfig = GraphConfig()) -> "ChoreoGraphGenerator":
+        from . import DEFAULT_REPERTOIRE
+
+        repertoire = Path(repertoire) if repertoire is not None else DEFAULT_REPERTOIRE
+        model, _ = load_checkpoint(checkpoint)
+        return cls(model, Repertoire.load(repertoire), config, (Path(checkpoint).name, repertoire.name))
+
+    def options(self, request: GenerationRequest) -> GraphConfig:
+        graph_options = {k: v for k, v in request.options.items() if k not in GENERIC_OPTIONS}
+        unknown = set(graph_options) - set(GraphConfig.__dataclass_fields__)
+        if unknown:
+            raise ParameterError(f"unknown graph option(s): {', '.join(sorted(unknown))}")
+        config = replace(self.config, **graph_options)
+        if config.top_k < 1 or config.blend_frames < 0 or config.dtw_stride < 1:
+            raise ParameterError("top_k and dtw_stride must be >= 1 and blend_frames >= 0")
+        return config
+
+    def allowed_clips(self, style: str | None) -> tuple[np.ndarray | None, str | None]:
+        """Repertoire clips a style prompt allows: a genre the repertoire has, or all of them."""
+        if style is None or not style.strip():
+            return None, None
+        genres = sorted({g for g in self.repertoire.genres if g})
+        match = next((g for g in genres if g.lower() == style.strip().lower()), None)
+        if match is None:
+            known = ", ".join(genres) or "none: it has no genre labels"
+            raise ParameterError(f"the graph backend picks styles from music; --style must be a repertoire genre ({known})")
+        return self.repertoire.genre_mask(match), match
+
+    def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
+        if request.constraints is not None:
+            raise ParameterError("the graph backend does not take constraints; use the sgmd commands")
+        config = self.options(request)
+        allowed, genre = self.allowed_clips(request.style)
+        report = progress or (lambda fraction: None)
+        mel = music_log_mel(request.music)
+        motion = self.dance(mel, config, allowed, report)
+        motion = motion.slice_frames(0, request.music.num_frames)
+        motion.metadata = {
+            "generator": "graph", "checkpoint": self.checkpoint_name, "repertoire": self.repertoire_name,
+            "style": request.style, "genre": genre, "seed": request.seed, "top_k": config.top_k,
+            "dynamic_graph": config.dynamic, "retempo": config.retempo,
+        }  # fmt: skip
+        return motion
+
+    def dance(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
+              progress: Callable[[float], None] = lambda fraction: None) -> Motion:
+        """The whole pipeline on a (T, n_mels) log-mel: T frames of motion.
+
+        Seconds are processed in chunks (select, warp, then walk the graph through them), so only
+        a chunk's candidates and warps are ever held, whatever the song's length.
+        """
+        seconds = max(1, math.ceil(len(mel) / NODE_FRAMES))
+        graph, path = DynamicGraph(self.repertoire, config), []
+        for first in range(0, seconds, CHUNK_SECONDS):
+            chunk = range(first, min(seconds, first + CHUNK_SECONDS))
+            windows = music_windows(self.model, mel, chunk)
+            candidates = select_candidates(windows, self.repertoire, config.top_k, self.model.config.style, allowed)
+            warps = warp_candidates(windows, candidates, self.repertoire, config)
+            for i, t in enumerate(chunk):
+                graph.insert(t, candidates[i], warps[i])
+                path.append(graph.step(t, windows.style[i]))
+            progress(0.9 * chunk.stop / seconds)
+        motion = assemble(path, self.repertoire, config.blend_frames)
+        progress(1.0)
+        return motion.slice_frames(0, len(mel))

@@ -1,0 +1,124 @@
+"""The motion repertoire: 8 s clips the graph may dance, with what the search needs precomputed.
+
+Per clip: root positions and joint rotations (to play it), each frame's pose seen from the
+dancer (to price transitions), the style vector and motion-beat count of its middle 4 s (to
+select it) and its 8 s tempo-density (to warp it). Stored as a plain .npz (no pickles).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+import torch
+
+from choreo.errors import ChoreoError
+from choreo.fileio import atomic_path
+from choreo.motion import Motion
+from choreo.motion.stitch import frame_local_positions, local_positions
+from choreo.skeleton import SMPL24
+
+from .config import CLIP_FRAMES, FPS, WINDOW_FRAMES
+from .data import beat_count, excerpt_starts
+from .model import ChoreoGraphModel
+
+FORMAT_VERSION = 1
+MIDDLE = slice((CLIP_FRAMES - WINDOW_FRAMES) // 2, (CLIP_FRAMES + WINDOW_FRAMES) // 2)
+
+
+@dataclass
+class Repertoire:
+    names: np.ndarray  # (N,) "source@start_frame"
+    genres: np.ndarray  # (N,) genre or ""
+    root_positions: np.ndarray  # (N, 240, 3) float32
+    rotations: np.ndarray  # (N, 240, 24, 4) float32 unit quaternions (float16 on disk)
+    offsets: np.ndarray  # (24, 3) the skeleton every clip is played on
+    poses: np.ndarray  # (N, 240, 24, 3) float16, each frame local to itself
+    style: np.ndarray  # (N, style_dim) float32, middle 4 s
+    beat_counts: np.ndarray  # (N,) float32, middle 4 s
+    tempo: np.ndarray  # (N, 240) float32 tempo-density
+    source: np.ndarray  # () str: how it was built
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def clip_motion(self, index: int) -> Motion:
+        return Motion(self.root_positions[index], self.rotations[index], fps=FPS,
+                      skeleton=SMPL24.with_offsets(self.offsets))
+
+    def genre_mask(self, genre: str | None) -> np.ndarray:
+        return np.ones(len(self), bool) if genre is None else self.genres == genre
+
+    def save(self, path: str | Path) -> None:
+        arrays = {f.name: getattr(self, f.name) for f in fields(self)}
+        arrays["rotations"] = self.rotations.astype(np.float16)  # 0.06 degree steps: half the file
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as handle:
+                np.savez_compressed(handle, format_version=FORMAT_VERSION, **arrays)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "Repertoire":
+        path = Path(path)
+        if not path.is_file():
+            raise ChoreoError(f"repertoire {path} does not exist")
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                if int(data["format_version"]) != FORMAT_VERSION:
+                    raise ChoreoError(f"{path} has repertoire format {int(data['format_version'])}, expected {FORMAT_VERSION}")
+                values = {f.name: data[f.name] for f in fields(cls)}
+        except ChoreoError:
+            raise
+        except Exception as error:
+            raise ChoreoError(f"{path} is not a readable repertoire ({type(error).__name__})") from None
+        values["rotations"] = values["rotations"].astype(np.float32)
+        repertoire = cls(**values)
+        if len(repertoire) == 0 or repertoire.rotations.shape[1:] != (CLIP_FRAMES, 24, 4):
+            raise ChoreoError(f"{path}: empty repertoire or clips that are not 8 s at 30 fps on SMPL-24")
+        return repertoire
+
+
+def fastest_joint_speed(positions: np.ndarray) -> float:
+    """Metres per second of the fastest joint between any two frames of a 30 fps clip."""
+    return float(np.linalg.norm(np.diff(positions, axis=0), axis=-1).max() * FPS)
+
+
+def build_repertoire(motions: Sequence[tuple[str, Motion, str | None]], model: ChoreoGraphModel, stride: int,
+                     source: str, progress: Callable[[int, int], None] | None = None,
+                     max_speed: float | None = None) -> Repertoire:
+    """Cut every 8 s clip (``stride`` frames apart) from (name, motion at 30 fps, genre) and
+    describe it with ``model``. All motions are played on the first one's skeleton.
+
+    ``max_speed`` (m/s) leaves out clips where a joint ever moves faster: glitches (a limb
+    flipping between two frames) that warping would only make faster."""
+    names, genres, roots, rotations, positions = [], [], [], [], []
+    for name, motion, genre in motions:
+        world = motion.joint_positions()
+        for start in excerpt_starts(motion.num_frames, CLIP_FRAMES, stride):
+            stop = start + CLIP_FRAMES
+            if max_speed is not None and fastest_joint_speed(world[start:stop]) > max_speed:
+                continue
+            names.append(f"{name}@{start}")
+            genres.append(genre or "")
+            roots.append(motion.root_positions[start:stop])
+            rotations.append(motion.rotations[start:stop])
+            positions.append(world[start:stop])
+    if not names:
+        raise ChoreoError("no motion gives an 8 s clip (too short, or every clip faster than the speed limit)")
+    positions = np.stack(positions).astype(np.float32)
+    local = np.stack([local_positions(p) for p in positions]).astype(np.float32)
+    middle = np.stack([local_positions(p[MIDDLE]) for p in positions]).astype(np.float32)
+    style, tempo = [], []
+    for first in range(0, len(names), 64):
+        batch = slice(first, first + 64)
+        style.append(model.motion_style(torch.from_numpy(middle[batch])).numpy())
+        tempo.append(model.motion_tempo_density(torch.from_numpy(local[batch])).numpy())
+        if progress:
+            progress(min(first + 64, len(names)), len(names))
+    return Repertoire(
+        names=np.array(names), genres=np.array(genres), root_positions=np.stack(roots).astype(np.float32),
+        rotations=np.stack(rotations).astype(np.float32), offsets=np.asarray(motions[0][1].skeleton.offsets, np.float32),
+        poses=frame_local_positions(positions).astype(np.float16), style=np.concatenate(style),
+        beat_counts=np.array([beat_count(p[MIDDLE]) for p in positions], np.float32), tempo=np.concatenate(tempo),
+        source=np.array(source))

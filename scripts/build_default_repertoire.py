@@ -1,0 +1,55 @@
+"""Build the repertoire `choreo graph` ships with, from the bundled SGMD model's own dances.
+
+    python scripts/build_default_repertoire.py [--data ../shared/data/m2d] [--out generators/choreo_graph/weights/repertoire-sgmd.npz]
+
+M2D motion may not be redistributed, so the shipped repertoire holds no M2D frame: for each genre
+the bundled SGMD checkpoint dances (seed 0, default sampler) to 40 s excerpts of M2D train-split
+songs, styled with that genre, and every 8 s clip of those dances (2 s apart) is described by the
+bundled ChoreoGraph models, leaving out clips where a joint ever moves faster than 8 m/s (a limb
+flipping between two frames). Only generated motion is stored, never the songs or their features.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from choreo.datasets import TRAIN, load_dataset
+from choreo.generator import GenerationRequest
+from choreo.music import Music
+from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE
+from choreo_graph.model import load_checkpoint
+from choreo_graph.repertoire import build_repertoire
+from choreo_sgmd import DEFAULT_CHECKPOINT as SGMD_CHECKPOINT
+from choreo_sgmd.generator import SGMDGenerator
+
+REPO = Path(__file__).resolve().parents[1]
+SONGS_PER_GENRE = 2
+EXCERPT_SECONDS = 40.0
+MAX_SPEED = 8.0  # m/s: clips where SGMD let a limb flip between two frames are left out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
+    parser.add_argument("--out", default=str(DEFAULT_REPERTOIRE))
+    parser.add_argument("--checkpoint", default=str(DEFAULT_CHECKPOINT))
+    args = parser.parse_args()
+    sgmd = SGMDGenerator(SGMD_CHECKPOINT)
+    clips = sorted((c for c in load_dataset(args.data) if c.split == TRAIN and c.audio_path), key=lambda c: c.name)
+    dances = []
+    for genre in sorted({c.genre for c in clips}):
+        for clip in [c for c in clips if c.genre == genre][:SONGS_PER_GENRE]:
+            music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + EXCERPT_SECONDS)
+            motion = sgmd.generate(GenerationRequest(music, style=genre, seed=0))
+            dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
+            print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
+    model, _ = load_checkpoint(args.checkpoint)
+    repertoire = build_repertoire(dances, model, stride=60, source="bundled SGMD generations (M2D train songs)",
+                                  max_speed=MAX_SPEED)
+    repertoire.save(args.out)
+    print(f"wrote {args.out}: {len(repertoire)} clips, {Path(args.out).stat().st_size / 1e6:.1f} MB")
+
+
+if __name__ == "__main__":
+    main()

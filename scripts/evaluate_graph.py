@@ -1,0 +1,95 @@
+"""Score ChoreoGraph on the M2D test split with a repertoire cut from the M2D train split.
+
+    python scripts/evaluate_graph.py [CHECKPOINT] [--top-k 512] [--variants full no-retempo motion-graph]
+                                     [--stride 2] [--save-repertoire m2d_train.npz]
+
+One 5 s dance per test window (2.5 s stride, as the reference row), danced from that window's
+music alone; one markdown row per variant: the full method and the paper's two ablations
+(without re-tempo: each clip's middle 4 s unwarped; motion graph: first node of each segment only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from choreo.datasets import TEST, TRAIN, load_dataset
+from choreo.metrics import Dance
+from choreo.metrics.protocol import TABLE_HEADER, music_beats, score, scoring_windows, table_row, windows_as_dances
+from choreo_graph import DEFAULT_CHECKPOINT
+from choreo_graph.config import GraphConfig
+from choreo_graph.data import clip_mel
+from choreo_graph.generator import ChoreoGraphGenerator
+from choreo_graph.graph import music_windows, select_candidates
+from choreo_graph.model import load_checkpoint
+from choreo_graph.repertoire import Repertoire, build_repertoire
+
+REPO = Path(__file__).resolve().parents[1]
+VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dynamic": False}}
+
+
+def selector_genre_precision(model, repertoire: Repertoire, windows, mels, ks=(1, 64)) -> str:
+    """How often the style-based selector's picks for a window's first 4 s share the clip's genre."""
+    chance = np.mean([np.mean(repertoire.genres == w.genre) for w in windows])
+    shares = {k: [] for k in ks}
+    for w in windows:
+        music = music_windows(model, mels[w.clip][w.start_frame : w.start_frame + len(w.features)], range(1))
+        for k in ks:
+            picks = select_candidates(music, repertoire, k, model.config.style)
+            shares[k].append(np.mean(repertoire.genres[picks] == w.genre))
+    found = ", ".join(f"K={k}: {100 * np.mean(v):.1f} %" for k, v in shares.items())
+    return f"selector picks of the test clip's genre: {found} (clips drawn at random: {100 * chance:.1f} %)"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("checkpoint", nargs="?", default=str(DEFAULT_CHECKPOINT))
+    parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
+    parser.add_argument("--top-k", type=int, nargs="+", default=[512])
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    parser.add_argument("--stride", type=float, default=2.0, help="seconds between repertoire clips")
+    parser.add_argument("--save-repertoire", default=None)
+    parser.add_argument("--repertoire", default=None, help="use this repertoire instead of cutting the train split")
+    args = parser.parse_args()
+
+    clips = load_dataset(args.data)
+    train = [c for c in clips if c.split == TRAIN]
+    test = [c for c in clips if c.split == TEST and c.audio_path]
+    model, _ = load_checkpoint(args.checkpoint)
+    started = time.perf_counter()
+    if args.repertoire:
+        repertoire = Repertoire.load(args.repertoire)
+    else:
+        repertoire = build_repertoire([(c.name, c.motion, c.genre) for c in train], model, round(args.stride * 30),
+                                      "M2D train")
+    print(f"repertoire: {len(repertoire)} clips of 8 s ({repertoire.source}, {time.perf_counter() - started:.1f} s)",
+          flush=True)
+    if args.save_repertoire:
+        repertoire.save(args.save_repertoire)
+        repertoire = Repertoire.load(args.save_repertoire)
+    generator = ChoreoGraphGenerator(model, repertoire)
+
+    mels = {c.name: clip_mel(c) for c in test}
+    windows = scoring_windows(test)
+    print(selector_genre_precision(model, repertoire, windows, mels), flush=True)
+    reference = windows_as_dances(train)
+    print(TABLE_HEADER.format(label="ChoreoGraph variant"), flush=True)
+    for top_k in args.top_k:
+        for variant in args.variants:
+            config = replace(GraphConfig(top_k=top_k), **VARIANTS[variant])
+            started = time.perf_counter()
+            dances = []
+            for w in windows:
+                mel = mels[w.clip][w.start_frame : w.start_frame + len(w.features)]
+                motion = generator.dance(mel, config)
+                dances.append(Dance(f"{w.clip}@{w.start_frame}", motion.joint_positions(), music_beats(w.features)))
+            label = f"{variant}, K={top_k} ({time.perf_counter() - started:.0f} s)"
+            print(table_row(label, score(dances, reference)), flush=True)
+
+
+if __name__ == "__main__":
+    main()

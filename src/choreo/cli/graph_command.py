@@ -1,0 +1,104 @@
+"""`choreo graph`: the ChoreoGraph backend (dance from a motion repertoire) and `choreo graph build`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+from typer.core import TyperGroup
+
+from .generate_command import CHECKPOINT, OUTPUT, SONG, Settings, dance_one, load_backend
+from .progress import progress_bar, stderr_console
+
+
+class DanceByDefault(TyperGroup):
+    """`choreo graph SONG ...` means `choreo graph dance SONG ...`; `build` stays a subcommand."""
+
+    def parse_args(self, ctx, args):
+        if args and args[0] not in self.commands and args[0] not in ("--help", "-h"):
+            args = ["dance", *args]
+        return super().parse_args(ctx, args)
+
+
+graph_app = typer.Typer(
+    cls=DanceByDefault, no_args_is_help=True, add_completion=False,
+    help="ChoreoGraph: dance assembled from a motion repertoire, warped onto the music's beats.\n\n"
+         "Example: choreo graph song.mp3 -o dance.bvh",
+)
+
+
+@graph_app.command("dance")
+def graph_dance(
+    song: Path = SONG, output: List[str] = OUTPUT,
+    repertoire: Optional[Path] = typer.Option(None, help="Repertoire from choreo graph build (default: the bundled one)."),
+    checkpoint: Optional[Path] = CHECKPOINT,
+    style: Optional[str] = typer.Option(None, help="Only use repertoire clips of this genre (default: chosen by the music)."),
+    top_k: int = typer.Option(512, "--top-k", "-k", help="Candidate clips per 4 s of music (the paper's K)."),
+    motion_graph: bool = typer.Option(False, "--motion-graph", help="Ablation: a plain motion graph (first node of each segment only)."),
+    no_retempo: bool = typer.Option(False, "--no-retempo", help="Ablation: use each clip's middle 4 s unwarped."),
+    seed: int = typer.Option(0, help="Recorded in the output; the graph search itself is deterministic."),
+    format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
+    preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
+) -> None:
+    """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
+
+    Examples:
+      choreo graph song.mp3 -o dance.bvh
+      choreo graph song.mp3 -o dance.bvh --repertoire my_moves.npz -k 128
+      choreo graph song.mp3 -o dance.npz --style waltz --preview
+    """
+    from ..errors import ParameterError
+
+    if top_k < 1:
+        raise ParameterError("--top-k must be at least 1")
+    settings = Settings(style, checkpoint, "graph", None, 1.0, "ddim", seed, format, preview)
+    backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo)
+    dance_one(backend, song, output, settings)
+
+
+@graph_app.command("build")
+def graph_build(
+    output: Path = typer.Option(..., "-o", "--output", help="Repertoire file to write (.npz)."),
+    data: Optional[Path] = typer.Option(None, help="Dataset folder (M2D, AIST++ or BVH files) to cut 8 s clips from."),
+    motions: List[Path] = typer.Option([], "--motion", help="A motion file to include (repeat); genre from --genre."),
+    genre: Optional[str] = typer.Option(None, help="Genre label for --motion files."),
+    split: str = typer.Option("train", help="Dataset split to use: train, test or all."),
+    stride: float = typer.Option(2.0, help="Seconds between the starts of consecutive 8 s clips."),
+    max_speed: Optional[float] = typer.Option(None, help="Leave out clips where a joint ever moves faster (m/s): glitches."),
+    checkpoint: Optional[Path] = CHECKPOINT,
+) -> None:
+    """Build a repertoire: every 8 s clip of a dataset split or of given motions, described by the models.
+
+    Examples:
+      choreo graph build --data ../shared/data/m2d -o m2d_train.npz
+      choreo graph build --motion a.bvh --motion b.bvh --genre waltz -o mine.npz --stride 1
+    """
+    import choreo_graph
+    from choreo_graph.model import load_checkpoint
+    from choreo_graph.repertoire import build_repertoire
+
+    from ..constraints import as_smpl
+    from ..errors import ParameterError
+    from ..fileio import check_output_dir
+    from ..formats import read_motion
+
+    if (data is None) == (not motions):
+        raise ParameterError("give either --data or --motion files")
+    if stride <= 0 or (max_speed is not None and max_speed <= 0):
+        raise ParameterError("--stride and --max-speed must be positive")
+    check_output_dir(output)
+    model, _ = load_checkpoint(checkpoint or choreo_graph.DEFAULT_CHECKPOINT)
+    if data is not None:
+        from ..datasets import load_dataset, select_split
+
+        clips = select_split(load_dataset(data), split)
+        sources = [(c.name, c.motion, c.genre) for c in clips]
+        source = f"{data.name} ({split})"
+    else:
+        sources = [(m.stem, as_smpl(read_motion(m), 30.0), genre) for m in motions]
+        source = f"{len(motions)} motion files"
+    with progress_bar("describing clips") as update:
+        repertoire = build_repertoire(sources, model, max(1, round(stride * 30)), source, update, max_speed)
+    repertoire.save(output)
+    stderr_console.print(f"wrote {output}: {len(repertoire)} clips of 8 s from {source}", highlight=False)
