@@ -32,6 +32,9 @@ CASES = [
     ("missing checkpoint", "generate {s} -o {o}.bvh --checkpoint {c}/nothing_here.pt", 2, "does not exist"),
     ("corrupt checkpoint", "generate {s} -o {o}.bvh --checkpoint {c}/corrupt_checkpoint.pt", 2, "not a readable checkpoint"),
     ("checkpoint of the other generator", "generate {s} -o {o}.bvh --checkpoint {c}/graph_checkpoint.pt", 2, "not an SGMD checkpoint"),
+    ("SGMD checkpoint given to graph", "graph {s} -o {o}.bvh --checkpoint {k}", 2, "not a ChoreoGraph checkpoint"),
+    ("missing repertoire", "graph {s} -o {o}.bvh --repertoire {c}/nothing_here.npz", 2, "does not exist"),
+    ("corrupt repertoire", "graph {s} -o {o}.bvh --repertoire {c}/corrupt_checkpoint.pt", 2, "not a readable repertoire"),
     ("output in a missing folder", "generate {s} -o {o}/missing/d.bvh --checkpoint {k}", 3, "does not exist"),
     ("output in a read-only folder", "generate {s} -o {o}.readonly/d.bvh --checkpoint {k}", 3, "not writable"),
 ]

@@ -7,7 +7,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from choreo.errors import ChoreoError
+from choreo.errors import InputError
 from choreo.fileio import atomic_path
 
 from .config import CLIP_FRAMES, NUM_JOINTS, WINDOW_FRAMES, ModelConfig
@@ -56,16 +56,16 @@ def load_checkpoint(path: str | Path) -> tuple[ChoreoGraphModel, dict]:
     """The model (eval mode) and the checkpoint's other entries; one-line errors on bad files."""
     path = Path(path)
     if not path.is_file():
-        raise ChoreoError(f"checkpoint {path} does not exist")
+        raise InputError(f"checkpoint {path} does not exist")
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as error:
-        raise ChoreoError(f"{path} is not a readable checkpoint ({type(error).__name__})") from None
+        raise InputError(f"{path} is not a readable checkpoint ({type(error).__name__})") from None
     if not isinstance(state, dict) or state.get("generator") != GENERATOR_NAME:
         other = state.get("generator") if isinstance(state, dict) else None
-        raise ChoreoError(f"{path} is not a ChoreoGraph checkpoint" + (f" (it is for {other!r})" if other else ""))
+        raise InputError(f"{path} is not a ChoreoGraph checkpoint" + (f" (it is for {other!r})" if other else ""))
     if state.get("format_version") != FORMAT_VERSION:
-        raise ChoreoError(f"{path} has checkpoint format {state.get('format_version')}, expected {FORMAT_VERSION}")
+        raise InputError(f"{path} has checkpoint format {state.get('format_version')}, expected {FORMAT_VERSION}")
     model = ChoreoGraphModel(ModelConfig.from_dict(state["model_config"]))
     model.load_state_dict(state["state_dict"])
     return model.eval(), state

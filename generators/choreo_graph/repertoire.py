@@ -14,7 +14,7 @@ from typing import Callable, Sequence
 import numpy as np
 import torch
 
-from choreo.errors import ChoreoError
+from choreo.errors import InputError
 from choreo.fileio import atomic_path
 from choreo.motion import Motion
 from choreo.motion.stitch import frame_local_positions, local_positions
@@ -62,20 +62,20 @@ class Repertoire:
     def load(cls, path: str | Path) -> "Repertoire":
         path = Path(path)
         if not path.is_file():
-            raise ChoreoError(f"repertoire {path} does not exist")
+            raise InputError(f"repertoire {path} does not exist")
         try:
             with np.load(path, allow_pickle=False) as data:
                 if int(data["format_version"]) != FORMAT_VERSION:
-                    raise ChoreoError(f"{path} has repertoire format {int(data['format_version'])}, expected {FORMAT_VERSION}")
+                    raise InputError(f"{path} has repertoire format {int(data['format_version'])}, expected {FORMAT_VERSION}")
                 values = {f.name: data[f.name] for f in fields(cls)}
-        except ChoreoError:
+        except InputError:
             raise
         except Exception as error:
-            raise ChoreoError(f"{path} is not a readable repertoire ({type(error).__name__})") from None
+            raise InputError(f"{path} is not a readable repertoire ({type(error).__name__})") from None
         values["rotations"] = values["rotations"].astype(np.float32)
         repertoire = cls(**values)
         if len(repertoire) == 0 or repertoire.rotations.shape[1:] != (CLIP_FRAMES, 24, 4):
-            raise ChoreoError(f"{path}: empty repertoire or clips that are not 8 s at 30 fps on SMPL-24")
+            raise InputError(f"{path}: empty repertoire or clips that are not 8 s at 30 fps on SMPL-24")
         return repertoire
 
 
@@ -105,7 +105,7 @@ def build_repertoire(motions: Sequence[tuple[str, Motion, str | None]], model: C
             rotations.append(motion.rotations[start:stop])
             positions.append(world[start:stop])
     if not names:
-        raise ChoreoError("no motion gives an 8 s clip (too short, or every clip faster than the speed limit)")
+        raise InputError("no motion gives an 8 s clip (too short, or every clip faster than the speed limit)")
     positions = np.stack(positions).astype(np.float32)
     local = np.stack([local_positions(p) for p in positions]).astype(np.float32)
     middle = np.stack([local_positions(p[MIDDLE]) for p in positions]).astype(np.float32)

@@ -16,6 +16,7 @@ from ..skeleton import SMPL24, Skeleton, forward_kinematics
 from ..skeleton import rotations as rot
 
 DEFAULT_FPS = 30.0
+FRAME_CHUNK = 4096  # frames converted at once where a whole song's intermediates would be large
 
 
 @dataclass(eq=False)
@@ -105,10 +106,14 @@ class Motion:
         return rot.quaternion_to_axis_angle(self.rotations)
 
     def joint_positions(self) -> np.ndarray:
-        """(T, J, 3) world joint positions by forward kinematics."""
-        return forward_kinematics(
-            self.rotation_matrices(), self.root_positions, self.skeleton.offsets, self.skeleton.parents
-        )
+        """(T, J, 3) world joint positions by forward kinematics, a chunk of frames at a time
+        (an hour of dance would otherwise hold gigabytes of rotation matrices at once)."""
+        out = np.empty((self.num_frames, self.num_joints, 3))
+        for first in range(0, self.num_frames, FRAME_CHUNK):
+            chunk = slice(first, first + FRAME_CHUNK)
+            out[chunk] = forward_kinematics(rot.quaternion_to_matrix(self.rotations[chunk]), self.root_positions[chunk],
+                                            self.skeleton.offsets, self.skeleton.parents)
+        return out
 
     # -- editing ------------------------------------------------------------------------------
     def replace(self, **changes) -> "Motion":

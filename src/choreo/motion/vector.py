@@ -8,7 +8,7 @@ from ..errors import ParameterError
 from ..skeleton import SMPL24
 from ..skeleton import rotations as rot
 from .contacts import foot_contacts
-from .motion import DEFAULT_FPS, Motion
+from .motion import DEFAULT_FPS, FRAME_CHUNK, Motion
 
 CONTACT_SLICE = slice(0, 4)
 ROOT_SLICE = slice(4, 7)
@@ -34,6 +34,10 @@ def vector_to_motion(vectors: np.ndarray, fps: float = DEFAULT_FPS, **kwargs) ->
     vectors = np.asarray(vectors, dtype=np.float64)
     if vectors.ndim != 2 or vectors.shape[1] != FRAME_DIM:
         raise ParameterError(f"frame vectors must have shape (T, {FRAME_DIM}), got {vectors.shape}")
-    rotmats = rot.rot6d_to_matrix(vectors[:, ROTATION_SLICE].reshape(len(vectors), 24, 6))
-    motion = Motion.from_rotation_matrices(vectors[:, ROOT_SLICE], rotmats, fps=fps, **kwargs)
+    rot6d = vectors[:, ROTATION_SLICE].reshape(len(vectors), 24, 6)
+    quaternions = np.zeros((len(vectors), 24, 4))
+    for first in range(0, len(vectors), FRAME_CHUNK):  # chunks bound the matrices' memory on long songs
+        chunk = slice(first, first + FRAME_CHUNK)
+        quaternions[chunk] = rot.matrix_to_quaternion(rot.rot6d_to_matrix(rot6d[chunk]))
+    motion = Motion(vectors[:, ROOT_SLICE], quaternions, fps=fps, **kwargs)
     return motion, vectors[:, CONTACT_SLICE]
