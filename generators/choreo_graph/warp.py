@@ -26,25 +26,28 @@ def subsequence_dtw(queries: np.ndarray, references: np.ndarray) -> np.ndarray:
     references = np.asarray(references, np.float32)
     batch, n = queries.shape
     m = references.shape[1]
-    # two columns of +inf in front: the shifted views below then need no bounds checks or copies
-    total = np.full((batch, n, m + 2), np.inf, np.float32)
-    step = np.zeros((batch, n, m), np.int8)
-    total[:, 0, 2:] = np.abs(queries[:, :1] - references)
+    # rows first, so each query row is one contiguous block; two columns of +inf in front so the
+    # shifted views below need no bounds checks or copies
+    total = np.full((n, batch, m + 2), np.inf, np.float32)
+    step = np.zeros((n, batch, m), np.int8)
+    total[0, :, 2:] = np.abs(queries[:, :1] - references)
     best = np.empty((batch, m), np.float32)
+    better = np.empty((batch, m), bool)
     for i in range(1, n):
-        diagonal, fast = total[:, i - 1, 1:-1], total[:, i - 1, :-2]
-        np.copyto(best, diagonal)
-        row_step = step[:, i]
-        better = fast < best  # strict: on ties the earlier step wins, as in librosa
-        row_step[better] = 1
-        np.copyto(best, fast, where=better)
+        diagonal, fast = total[i - 1, :, 1:-1], total[i - 1, :, :-2]
+        np.less(fast, diagonal, out=better)  # strict: on ties the earlier step wins, as in librosa
+        np.minimum(diagonal, fast, out=best)
+        row_step = step[i]
+        np.copyto(row_step, better, casting="unsafe")
         if i >= 2:
-            slow = total[:, i - 2, 1:-1]
-            better = slow < best
-            row_step[better] = 2
-            np.copyto(best, slow, where=better)
-        total[:, i, 2:] = np.abs(queries[:, i : i + 1] - references) + best
-    return _backtrack(total[:, -1, 2:].argmin(1), step, n)
+            slow = total[i - 2, :, 1:-1]
+            np.less(slow, best, out=better)
+            np.minimum(best, slow, out=best)
+            np.copyto(row_step, 2, where=better)
+        np.subtract(queries[:, i : i + 1], references, out=total[i, :, 2:])
+        np.abs(total[i, :, 2:], out=total[i, :, 2:])
+        total[i, :, 2:] += best
+    return _backtrack(total[-1, :, 2:].argmin(1), step, n)
 
 
 def _backtrack(end: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
@@ -56,7 +59,7 @@ def _backtrack(end: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
     matched[rows, i] = j
     active = i > 0
     while active.any():
-        s = step[rows[active], i[active], j[active]]
+        s = step[i[active], rows[active], j[active]]
         i[active] -= STEPS[s, 0]
         j[active] -= STEPS[s, 1]
         matched[rows[active], i[active]] = j[active]

@@ -3,7 +3,8 @@
 Every window overlaps the next by half. After each denoising step but the last, the first half of
 window i is overwritten with the second half of window i-1 (EDGE's long-form scheme), so the
 windows denoise towards agreement; the final predictions are cross-faded over each overlap. The
-network runs over the windows in chunks, so its activations do not grow with the song.
+network runs over the windows in chunks, and songs longer than a block of windows are sampled
+block by block (each block continuing the last), so memory does not grow with the song.
 """
 
 from __future__ import annotations
