@@ -82,6 +82,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--guidance", type=float, default=2.0)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--resample", type=int, default=1, help="RePaint resampling: runs of each masked step")
     parser.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
     parser.add_argument("--limit", type=int, default=None, help="score only the first N windows (smoke tests)")
     args = parser.parse_args()
@@ -100,7 +101,8 @@ def main() -> None:
         rng = np.random.default_rng(args.seed)
         constraints = [task_constraints(task, m, rng) for m in real]
         motions = generate_window_motions(generator, windows, SamplingOptions(steps=args.steps, guidance=args.guidance,
-                                                                               seed=args.seed), constraints=constraints)
+                                                                               seed=args.seed, resample=args.resample),
+                                             constraints=constraints)
         errors, path_errors, jerk_gen, jerk_real = [], [], [], []
         dances = []
         for window, motion, truth, c in zip(windows, motions, real, constraints):

@@ -261,3 +261,19 @@ def test_root_alignment_moves_the_prediction_rigidly_onto_the_given_root():
     assert torch.allclose(shift, shift[:1].expand_as(shift))  # rigid: the same offset on every frame
     assert torch.allclose(aligned[0, :3, 4:7].mean(0), values[0, :3, 4:7].mean(0), atol=1e-6)
     assert torch.equal(aligned[1], prediction[1]) and torch.equal(aligned[..., 7:], prediction[..., 7:])
+
+
+def test_displacement_map_is_exact_at_given_values_and_smooth_around_them():
+    from choreo.constraints.displacement import displace_to_constraints
+
+    frames = np.zeros((1, 100, 3))
+    values = np.ones((1, 100, 3))
+    mask = np.zeros((1, 100, 3), bool)
+    mask[0, 50, 0] = True  # one keyframe: a tent of offsets 15 frames wide on each side
+    mask[0, ::3, 2] = True  # dense given frames: bridged at full strength
+    mask[0, [10, 80], 1] = True  # far apart: each fades out on its own
+    moved = displace_to_constraints(frames, values, mask)
+    np.testing.assert_array_equal(moved[mask], 1.0)
+    assert np.abs(np.diff(moved[0], axis=0)).max() <= 1 / 15 + 1e-9  # no step anywhere
+    assert moved[0, 35, 0] == 0 and moved[0, 65, 0] == 0 and moved[0, 45, 1] == 0
+    np.testing.assert_array_equal(moved[0, :98, 2], 1.0)

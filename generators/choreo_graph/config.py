@@ -65,9 +65,9 @@ class GraphConfig:
 class TrainConfig:
     batch_size: int = 32
     learning_rate: float = 1e-3
-    style_steps: int = 3000
-    motion_tempo_steps: int = 3000
-    music_tempo_steps: int = 2000
+    style_steps: int = 1200  # the bundled models' budget (docs/graph.md)
+    motion_tempo_steps: int = 1200
+    music_tempo_steps: int = 1200
     clip_stride: int = FPS  # 8 s training pairs start every second
     seed: int = 0
 

@@ -14,6 +14,7 @@ from typing import Callable
 
 import torch
 
+from choreo.constraints.displacement import displace_to_constraints
 from choreo.motion.vector import ROOT_SLICE
 
 from .guidance import GuidedDenoiser
@@ -29,6 +30,7 @@ class SamplingOptions:
     seed: int = 0
     chunk_windows: int = 32  # windows per network call
     block_windows: int = 48  # windows denoised together (2 min of song); longer songs go block by block
+    resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
 
 
 def window_starts(num_frames: int, window: int) -> list[int]:
@@ -96,9 +98,26 @@ class Inpainting:
         x0[..., ROOT_SLICE] += torch.where(known > 0, offset, torch.zeros_like(offset)).unsqueeze(-2)
         return x0
 
+    def step(self, denoise: Callable[[torch.Tensor], torch.Tensor], sampler, schedule: NoiseSchedule, x: torch.Tensor,
+             t: int, generator: torch.Generator, resample: int) -> torch.Tensor:
+        """One masked step t -> t_prev, run ``resample`` times: after each but the last, the result
+        is noised back to level t (RePaint's resampling), so the unknown part is denoised again
+        with the known part already in place, which lets the two agree at their borders."""
+        t_prev = sampler.previous(t)
+        for attempt in range(resample):
+            x_prev = sampler.step(self.align_root(denoise(x)), t, x, generator).prev_sample
+            x_prev = self.impose(x_prev, schedule, t_prev, generator)
+            if attempt + 1 == resample or t_prev < 0:
+                return x_prev
+            keep = float(schedule.alphas_cumprod[t] / schedule.alphas_cumprod[t_prev])
+            noise = torch.randn(x_prev.shape, generator=generator, dtype=x_prev.dtype)
+            x = keep**0.5 * x_prev + (1 - keep) ** 0.5 * noise
+        return x_prev
+
     def impose(self, x: torch.Tensor, schedule: NoiseSchedule, t_prev: int, generator: torch.Generator) -> torch.Tensor:
-        if t_prev < 0:
-            return torch.where(self.mask, self.values, x)
+        if t_prev < 0:  # the end: exact values, reached by a displacement map rather than a step
+            moved = displace_to_constraints(x.numpy(), self.values.numpy(), self.mask.numpy())
+            return torch.from_numpy(moved).to(x.dtype)
         noise = torch.randn(x.shape, generator=generator, dtype=x.dtype)
         noised = schedule.q_sample(self.values, torch.full((len(x),), t_prev), noise)
         return torch.where(self.mask, noised, x)
@@ -194,11 +213,12 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
     denoiser = GuidedDenoiser(model, music_windows, styles, keep, options.guidance, options.chunk_windows)
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
-        evaluations += denoiser.evaluations_per_step  # per window: the cost unit of diffusion samplers
-        x0 = denoiser(x, t) if known is None else known.align_root(denoiser(x, t))
-        x = sampler.step(x0, t, x, generator).prev_sample
-        if known is not None:
-            x = known.impose(x, schedule, sampler.previous(t), generator)
+        if known is None:
+            evaluations += denoiser.evaluations_per_step  # per window: the cost unit of diffusion samplers
+            x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
+        else:
+            evaluations += denoiser.evaluations_per_step * options.resample
+            x = known.step(lambda sample: denoiser(sample, t), sampler, schedule, x, t, generator, options.resample)
         if i + 1 < len(sampler.timesteps):  # the final x0s are cross-faded by stitch() instead
             x[1:, :hop] = x[:-1, window - hop:]
         if progress:
@@ -218,8 +238,8 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
     denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows)
     for t in sampler.timesteps.tolist():
-        x0 = denoiser(x, t) if inpainting is None else inpainting.align_root(denoiser(x, t))
-        x = sampler.step(x0, t, x, generator).prev_sample
-        if inpainting is not None:
-            x = inpainting.impose(x, schedule, sampler.previous(t), generator)
+        if inpainting is None:
+            x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
+        else:
+            x = inpainting.step(lambda sample: denoiser(sample, t), sampler, schedule, x, t, generator, options.resample)
     return x
