@@ -59,22 +59,13 @@ def sgmd_dances(checkpoint: Path, windows, guidance: float, with_style: bool) ->
 
 def graph_dances(train_clips, test_clips, windows) -> list[Dance]:
     from choreo_graph import DEFAULT_CHECKPOINT
-    from choreo_graph.config import GraphConfig
-    from choreo_graph.data import clip_mel
+    from choreo_graph.evaluation import clips_repertoire, generate_window_dances, window_mels
     from choreo_graph.generator import ChoreoGraphGenerator
     from choreo_graph.model import load_checkpoint
-    from choreo_graph.repertoire import build_repertoire
 
     model, _ = load_checkpoint(DEFAULT_CHECKPOINT)
-    repertoire = build_repertoire([(c.name, c.motion, c.genre) for c in train_clips], model, 60, "M2D train")
-    generator = ChoreoGraphGenerator(model, repertoire)
-    mels = {c.name: clip_mel(c) for c in test_clips}
-    dances = []
-    for w in windows:
-        mel = mels[w.clip][w.start_frame : w.start_frame + len(w.features)]
-        motion = generator.dance(mel, GraphConfig())
-        dances.append(Dance(f"{w.clip}@{w.start_frame}", motion.joint_positions(), music_beats(w.features)))
-    return dances
+    generator = ChoreoGraphGenerator(model, clips_repertoire(model, train_clips, 60, "M2D train"))
+    return generate_window_dances(generator, windows, window_mels(test_clips))
 
 
 def speed_and_memory(durations: list[float], folder: Path) -> list[tuple]:
@@ -171,7 +162,7 @@ def main() -> None:
         sets["SGMD without style (EDGE-equivalent ablation, 1,500 steps)"] = sgmd_dances(args.edge, windows, 2.0, False)
     sets["SGMD bundled, guidance 1"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, windows, 1.0, True)
     sets["SGMD bundled, guidance 2 (default)"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, windows, 2.0, True)
-    sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, [c for c in test if c.audio_path], windows)
+    sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, test, windows)
     reports = {name: score(dances, reference) for name, dances in sets.items()}
 
     print("style adherence...", flush=True)

@@ -17,9 +17,7 @@ from pathlib import Path
 from choreo.datasets import TRAIN, load_dataset
 from choreo.generator import GenerationRequest
 from choreo.music import Music
-from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE
-from choreo_graph.model import load_checkpoint
-from choreo_graph.repertoire import build_repertoire
+from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, build_repertoire_file
 from choreo_sgmd import DEFAULT_CHECKPOINT as SGMD_CHECKPOINT
 from choreo_sgmd.generator import SGMDGenerator
 
@@ -44,10 +42,8 @@ def main() -> None:
             motion = sgmd.generate(GenerationRequest(music, style=genre, seed=0))
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
-    model, _ = load_checkpoint(args.checkpoint)
-    repertoire = build_repertoire(dances, model, stride=60, source="bundled SGMD generations (M2D train songs)",
-                                  max_speed=MAX_SPEED)
-    repertoire.save(args.out)
+    repertoire = build_repertoire_file(dances, args.out, "bundled SGMD generations (M2D train songs)", stride=60,
+                                       checkpoint=args.checkpoint, max_speed=MAX_SPEED)
     print(f"wrote {args.out}: {len(repertoire)} clips, {Path(args.out).stat().st_size / 1e6:.1f} MB")
 
 

@@ -18,15 +18,14 @@ from pathlib import Path
 import numpy as np
 
 from choreo.datasets import TEST, TRAIN, load_dataset
-from choreo.metrics import Dance
-from choreo.metrics.protocol import TABLE_HEADER, music_beats, score, scoring_windows, table_row, windows_as_dances
+from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
 from choreo_graph import DEFAULT_CHECKPOINT
 from choreo_graph.config import GraphConfig
-from choreo_graph.data import clip_mel
+from choreo_graph.evaluation import clips_repertoire, generate_window_dances, window_mels
 from choreo_graph.generator import ChoreoGraphGenerator
 from choreo_graph.graph import music_windows, select_candidates
 from choreo_graph.model import load_checkpoint
-from choreo_graph.repertoire import Repertoire, build_repertoire
+from choreo_graph.repertoire import Repertoire
 
 REPO = Path(__file__).resolve().parents[1]
 VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dynamic": False}}
@@ -64,8 +63,7 @@ def main() -> None:
     if args.repertoire:
         repertoire = Repertoire.load(args.repertoire)
     else:
-        repertoire = build_repertoire([(c.name, c.motion, c.genre) for c in train], model, round(args.stride * 30),
-                                      "M2D train")
+        repertoire = clips_repertoire(model, train, round(args.stride * 30), "M2D train")
     print(f"repertoire: {len(repertoire)} clips of 8 s ({repertoire.source}, {time.perf_counter() - started:.1f} s)",
           flush=True)
     if args.save_repertoire:
@@ -73,7 +71,7 @@ def main() -> None:
         repertoire = Repertoire.load(args.save_repertoire)
     generator = ChoreoGraphGenerator(model, repertoire)
 
-    mels = {c.name: clip_mel(c) for c in test}
+    mels = window_mels(test)
     windows = scoring_windows(test)
     print(selector_genre_precision(model, repertoire, windows, mels), flush=True)
     reference = windows_as_dances(train)
@@ -82,11 +80,7 @@ def main() -> None:
         for variant in args.variants:
             config = replace(GraphConfig(top_k=top_k), **VARIANTS[variant])
             started = time.perf_counter()
-            dances = []
-            for w in windows:
-                mel = mels[w.clip][w.start_frame : w.start_frame + len(w.features)]
-                motion = generator.dance(mel, config)
-                dances.append(Dance(f"{w.clip}@{w.start_frame}", motion.joint_positions(), music_beats(w.features)))
+            dances = generate_window_dances(generator, windows, mels, config)
             label = f"{variant}, K={top_k} ({time.perf_counter() - started:.0f} s)"
             print(table_row(label, score(dances, reference)), flush=True)
 

@@ -49,20 +49,18 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, max_steps: int
     return train_graph(style_data, clip_data, excerpts(test) if test else None, out_dir, config=config, progress=progress)
 
 
-def build_repertoire_from_dataset(data_dir: str | Path, out: str | Path, checkpoint: str | Path = DEFAULT_CHECKPOINT,
-                                  split: str | None = "train", stride: int = 60, progress=None) -> Path:
-    """A repertoire of every 8 s clip (``stride`` frames apart) of a dataset split."""
-    from choreo.datasets import load_dataset, select_split
+def build_repertoire_file(motions, out: str | Path, source: str, stride: int, checkpoint: str | Path | None = None,
+                          max_speed: float | None = None, progress=None):
+    """Cut, describe (with the bundled or given models) and save a repertoire; returns it.
 
+    ``motions`` are (name, motion at 30 fps, genre) triples; ``stride`` is in frames."""
     from .model import load_checkpoint
     from .repertoire import build_repertoire
 
-    model, _ = load_checkpoint(checkpoint)
-    clips = select_split(load_dataset(data_dir), split)
-    motions = [(c.name, c.motion, c.genre) for c in clips]
-    repertoire = build_repertoire(motions, model, stride, f"{Path(data_dir).name} split {split or 'all'}", progress)
+    model, _ = load_checkpoint(checkpoint or DEFAULT_CHECKPOINT)
+    repertoire = build_repertoire(motions, model, stride, source, progress, max_speed)
     repertoire.save(out)
-    return Path(out)
+    return repertoire
 
 
 def build_generator(checkpoint: str | Path, repertoire: str | Path | None = None, **graph_options):

@@ -8,10 +8,12 @@ from typing import Sequence
 
 import numpy as np
 
-from choreo.datasets import Clip
+from choreo.datasets import Clip, WindowConfig, window_starts
 from choreo.metrics.beats import motion_beats
 from choreo.motion.stitch import local_positions
 from choreo.music.mel import log_mel_from_file
+
+from .config import FPS
 
 
 def clip_mel(clip: Clip) -> np.ndarray:
@@ -21,8 +23,9 @@ def clip_mel(clip: Clip) -> np.ndarray:
     return log_mel_from_file(clip.audio_path, max(clip.audio_offset, 0.0), clip.motion.num_frames)
 
 
-def excerpt_starts(num_frames: int, length: int, stride: int) -> range:
-    return range(0, num_frames - length + 1, stride)
+def excerpt_starts(num_frames: int, length: int, stride: int) -> list[int]:
+    """Start frames of every full ``length``-frame excerpt, ``stride`` frames apart (the datasets' windowing)."""
+    return window_starts(num_frames, WindowConfig(seconds=length / FPS, stride_seconds=stride / FPS, fps=FPS))
 
 
 def beat_count(positions: np.ndarray) -> int:

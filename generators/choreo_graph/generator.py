@@ -70,8 +70,7 @@ class ChoreoGraphGenerator(Generator):
         allowed, genre = self.allowed_clips(request.style)
         report = progress or (lambda fraction: None)
         mel = music_log_mel(request.music)
-        motion = self.dance(mel, config, allowed, report)
-        motion = motion.slice_frames(0, request.music.num_frames)
+        motion = self.dance(mel, config, allowed, report)  # as many frames as the mel, i.e. the music
         motion.metadata = {
             "generator": "graph", "checkpoint": self.checkpoint_name, "repertoire": self.repertoire_name,
             "style": request.style, "genre": genre, "seed": request.seed, "top_k": config.top_k,

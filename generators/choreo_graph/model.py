@@ -7,8 +7,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from choreo.errors import InputError
-from choreo.fileio import atomic_path
+from choreo.generator.checkpoint import read_checkpoint, write_checkpoint
 
 from .config import CLIP_FRAMES, NUM_JOINTS, WINDOW_FRAMES, ModelConfig
 from .style import StyleModel
@@ -46,26 +45,13 @@ class ChoreoGraphModel(nn.Module):
 
 
 def save_checkpoint(model: ChoreoGraphModel, path: str | Path, extra: dict | None = None) -> None:
-    state = {"format_version": FORMAT_VERSION, "generator": GENERATOR_NAME, "model_config": model.config.to_dict(),
-             "state_dict": model.state_dict(), **(extra or {})}
-    with atomic_path(path) as tmp:
-        torch.save(state, tmp)
+    state = {"model_config": model.config.to_dict(), "state_dict": model.state_dict(), **(extra or {})}
+    write_checkpoint(state, path, GENERATOR_NAME, FORMAT_VERSION)
 
 
 def load_checkpoint(path: str | Path) -> tuple[ChoreoGraphModel, dict]:
     """The model (eval mode) and the checkpoint's other entries; one-line errors on bad files."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"checkpoint {path} does not exist")
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as error:
-        raise InputError(f"{path} is not a readable checkpoint ({type(error).__name__})") from None
-    if not isinstance(state, dict) or state.get("generator") != GENERATOR_NAME:
-        other = state.get("generator") if isinstance(state, dict) else None
-        raise InputError(f"{path} is not a ChoreoGraph checkpoint" + (f" (it is for {other!r})" if other else ""))
-    if state.get("format_version") != FORMAT_VERSION:
-        raise InputError(f"{path} has checkpoint format {state.get('format_version')}, expected {FORMAT_VERSION}")
+    state = read_checkpoint(path, GENERATOR_NAME, "a ChoreoGraph", FORMAT_VERSION)
     model = ChoreoGraphModel(ModelConfig.from_dict(state["model_config"]))
     model.load_state_dict(state["state_dict"])
     return model.eval(), state

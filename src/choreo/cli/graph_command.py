@@ -74,9 +74,7 @@ def graph_build(
       choreo graph build --data ../shared/data/m2d -o m2d_train.npz
       choreo graph build --motion a.bvh --motion b.bvh --genre waltz -o mine.npz --stride 1
     """
-    import choreo_graph
-    from choreo_graph.model import load_checkpoint
-    from choreo_graph.repertoire import build_repertoire
+    from choreo_graph import build_repertoire_file
 
     from ..constraints import as_smpl
     from ..errors import ParameterError
@@ -88,7 +86,6 @@ def graph_build(
     if stride <= 0 or (max_speed is not None and max_speed <= 0):
         raise ParameterError("--stride and --max-speed must be positive")
     check_output_dir(output)
-    model, _ = load_checkpoint(checkpoint or choreo_graph.DEFAULT_CHECKPOINT)
     if data is not None:
         from ..datasets import load_dataset, select_split
 
@@ -99,6 +96,6 @@ def graph_build(
         sources = [(m.stem, as_smpl(read_motion(m), 30.0), genre) for m in motions]
         source = f"{len(motions)} motion files"
     with progress_bar("describing clips") as update:
-        repertoire = build_repertoire(sources, model, max(1, round(stride * 30)), source, update, max_speed)
-    repertoire.save(output)
+        repertoire = build_repertoire_file(sources, output, source, max(1, round(stride * 30)), checkpoint,
+                                           max_speed, update)
     stderr_console.print(f"wrote {output}: {len(repertoire)} clips of 8 s from {source}", highlight=False)
