@@ -4,7 +4,8 @@
 
 1. Speed: seconds to dance 10 s, 60 s and 5 min of music (the example loop tiled) for each K,
    with the bundled models and repertoire; the log-mel analysis is timed on its own column (the
-   35-d feature analysis every command runs first is not included, as in bench_sgmd).
+   35-d feature analysis every command runs first is not included, as in bench_sgmd). Beside it,
+   the same dance without the repeat cost, timed in the same run, and the ratio of the two.
 2. Memory: peak RSS of a whole `choreo graph` run (fresh process, default settings) per song length.
 """
 
@@ -31,21 +32,26 @@ from common import TARGET_SECONDS, cli_peak_rss, write_song  # noqa: E402
 
 def speed(generator: ChoreoGraphGenerator, top_ks: list[int], durations: list[float], folder: Path) -> None:
     print(f"\n## Speed ({torch.get_num_threads()} threads, repertoire of {len(generator.repertoire)} clips)\n")
-    print("| song | K | log-mel (s) | dance (s) | total (s) | x 3 s target (60 s song) |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    print("| song | K | log-mel (s) | dance (s) | total (s) | x 3 s target (60 s song) | without repeat cost (s) | ratio |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for seconds in durations:
         music = Music.from_file(write_song(folder, seconds))
         started = time.perf_counter()
         music_log_mel(music)
         mel_seconds = time.perf_counter() - started
         for top_k in top_ks:
-            generator.config = GraphConfig(top_k=top_k)
-            started = time.perf_counter()
-            generator.generate(GenerationRequest(music))
-            total = time.perf_counter() - started
+            total = timed(generator, GraphConfig(top_k=top_k), music)
+            plain = timed(generator, GraphConfig(top_k=top_k, repeat_cost=0.0), music)
             ratio = f"{total / TARGET_SECONDS:.2f}" if seconds == 60 else "-"
-            print(f"| {seconds:g} s | {top_k} | {mel_seconds:.2f} | {total - mel_seconds:.2f} | {total:.2f} | {ratio} |",
-                  flush=True)
+            print(f"| {seconds:g} s | {top_k} | {mel_seconds:.2f} | {total - mel_seconds:.2f} | {total:.2f} | {ratio} "
+                  f"| {plain:.2f} | {total / plain:.2f} |", flush=True)
+
+
+def timed(generator: ChoreoGraphGenerator, config: GraphConfig, music: Music) -> float:
+    generator.config = config
+    started = time.perf_counter()
+    generator.generate(GenerationRequest(music))
+    return time.perf_counter() - started
 
 
 def memory(minutes: list[float], folder: Path) -> None:

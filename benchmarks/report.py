@@ -8,8 +8,10 @@ closest, its motion played as is); SGMD without style (a model trained without a
 the EDGE-equivalent ablation); the bundled SGMD at guidance 1 and 2; ChoreoGraph with the bundled
 models and a repertoire cut from the M2D train split. Style adherence: a genre classifier trained
 on real train windows, its accuracy on real test windows, then the share of each method's windows
-it recognises as the genre asked for. Then speed and peak memory of both generators for 10 s,
-60 s and 10 min songs. Writes the markdown report and its plots (``--out`` folder + report/).
+it recognises as the genre asked for. Beat-rate lock on songs from outside M2D whose tempo is
+known (LMMS's demo songs, benchmarks/beat_lock.py; skipped with a note where LMMS is not
+installed). Then speed and peak memory of both generators for 10 s, 60 s and 10 min songs.
+Writes the markdown report and its plots (``--out`` folder + report/).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from choreo.metrics.protocol import TABLE_HEADER, music_beats, score, scoring_wi
 from choreo.music import Music
 
 sys.path.insert(0, str(Path(__file__).parent))
+from beat_lock import dance_outside_songs, markdown as beat_lock_table, real_m2d_dancers  # noqa: E402
 from common import REPO, cli_peak_rss, write_song  # noqa: E402
 
 EDGE_CHECKPOINT = REPO / "checkpoints" / "sgmd-edge-m2d.pt"
@@ -169,6 +172,11 @@ def main() -> None:
     classifier = GenreClassifier.fit([w.motion.joint_positions() for w in train_windows], [w.genre for w in train_windows])
     adherence = {name: classifier.agreement([d.positions for d in dances], genres) for name, dances in sets.items()}
 
+    print("beat-rate lock on outside songs...", flush=True)
+    outside = dance_outside_songs(60.0)
+    lock_lines = (beat_lock_table(outside, real_m2d_dancers(Path(args.data))) if outside else
+                  ["Not measured in this run: LMMS is not installed (`apt-get install lmms`, then run again)."])
+
     print("speed and memory...", flush=True)
     with tempfile.TemporaryDirectory() as folder:
         speed_rows = speed_and_memory(args.durations, Path(folder))
@@ -205,6 +213,15 @@ def main() -> None:
         *(f"| {name} | {100 * value:.1f} % |" for name, value in adherence.items()),
         "",
         "The first row is the classifier's accuracy on real test windows: the ceiling the others are read against.",
+        "",
+        "## Beat-rate lock on songs from outside M2D",
+        "",
+        f"The {len(outside)} demo songs Debian's LMMS package ships (their project files state the tempo), rendered",
+        "with LMMS, a minute of each from 10 s in, danced by both bundled generators with their defaults.",
+        "Salience: the normalised autocorrelation of the dance's motion beats at one or two beat periods",
+        "(`choreo.metrics.tempo_salience`); the lock measure and its reference are in benchmarks/beat_lock.py.",
+        "",
+        *lock_lines,
         "",
         "## Speed and memory",
         "",

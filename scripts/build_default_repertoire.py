@@ -6,7 +6,8 @@ M2D motion may not be redistributed, so the shipped repertoire holds no M2D fram
 the bundled SGMD checkpoint dances (seed 0, default sampler) to 40 s excerpts of M2D train-split
 songs, styled with that genre, and every 8 s clip of those dances (2 s apart) is described by the
 bundled ChoreoGraph models, leaving out clips where a joint ever moves faster than 8 m/s (a limb
-flipping between two frames). Only generated motion is stored, never the songs or their features.
+flipping between two frames) or the root faster than 3 m/s (a dash no ballroom dancer makes, which
+warping can make twice as fast). Only generated motion is stored, never the songs or their features.
 """
 
 from __future__ import annotations
@@ -18,13 +19,14 @@ from choreo.datasets import TRAIN, load_dataset
 from choreo.generator import GenerationRequest
 from choreo.music import Music
 from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, build_repertoire_file
+from choreo_graph.repertoire import SpeedLimits
 from choreo_sgmd import DEFAULT_CHECKPOINT as SGMD_CHECKPOINT
 from choreo_sgmd.generator import SGMDGenerator
 
 REPO = Path(__file__).resolve().parents[1]
 SONGS_PER_GENRE = 2
 EXCERPT_SECONDS = 40.0
-MAX_SPEED = 8.0  # m/s: clips where SGMD let a limb flip between two frames are left out
+LIMITS = SpeedLimits(joint=8.0, root=3.0)  # m/s: SGMD's limb flips and dashes are left out
 
 
 def main() -> None:
@@ -43,7 +45,7 @@ def main() -> None:
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
     repertoire = build_repertoire_file(dances, args.out, "bundled SGMD generations (M2D train songs)", stride=60,
-                                       checkpoint=args.checkpoint, max_speed=MAX_SPEED)
+                                       checkpoint=args.checkpoint, limits=LIMITS)
     print(f"wrote {args.out}: {len(repertoire)} clips, {Path(args.out).stat().st_size / 1e6:.1f} MB")
 
 

@@ -1,11 +1,13 @@
 """Score ChoreoGraph on the M2D test split with a repertoire cut from the M2D train split.
 
-    python scripts/evaluate_graph.py [CHECKPOINT] [--top-k 512] [--variants full no-retempo motion-graph]
-                                     [--stride 2] [--save-repertoire m2d_train.npz]
+    python scripts/evaluate_graph.py [CHECKPOINT] [--top-k 512] [--variants full no-retempo motion-graph no-repeat-cost]
+                                     [--stride 2] [--save-repertoire m2d_train.npz] [--whole-songs]
 
 One 5 s dance per test window (2.5 s stride, as the reference row), danced from that window's
-music alone; one markdown row per variant: the full method and the paper's two ablations
-(without re-tempo: each clip's middle 4 s unwarped; motion graph: first node of each segment only).
+music alone; one markdown row per variant: the full method, the paper's two ablations (without
+re-tempo: each clip's middle 4 s unwarped; motion graph: first node of each segment only) and
+ours (no repeat cost). ``--whole-songs`` also dances every test song whole and counts the seconds
+that replay what was danced in the 30 s before, with and without the repeat cost.
 """
 
 from __future__ import annotations
@@ -23,12 +25,13 @@ from choreo_graph import DEFAULT_CHECKPOINT
 from choreo_graph.config import GraphConfig
 from choreo_graph.evaluation import clips_repertoire, generate_window_dances, window_mels
 from choreo_graph.generator import ChoreoGraphGenerator
-from choreo_graph.graph import music_windows, select_candidates
+from choreo_graph.graph import music_windows, replayed_nodes, select_candidates
 from choreo_graph.model import load_checkpoint
 from choreo_graph.repertoire import Repertoire
 
 REPO = Path(__file__).resolve().parents[1]
-VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dynamic": False}}
+VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dynamic": False},
+            "no-repeat-cost": {"repeat_cost": 0.0}}
 
 
 def selector_genre_precision(model, repertoire: Repertoire, windows, mels, ks=(1, 64)) -> str:
@@ -44,6 +47,20 @@ def selector_genre_precision(model, repertoire: Repertoire, windows, mels, ks=(1
     return f"selector picks of the test clip's genre: {found} (clips drawn at random: {100 * chance:.1f} %)"
 
 
+def whole_song_replays(generator: ChoreoGraphGenerator, mels: dict[str, np.ndarray], top_k: int) -> str:
+    """Seconds of whole test songs that replay source frames danced in the 30 s before."""
+    found = []
+    for label, cost in (("repeat cost", GraphConfig.repeat_cost), ("no repeat cost", 0.0)):
+        config = GraphConfig(top_k=top_k, repeat_cost=cost)
+        paths = [generator.walk(mel, config) for mel in mels.values()]
+        replayed = sum(replayed_nodes(p, generator.repertoire, config.repeat_memory) for p in paths)
+        seconds = sum(len(p) for p in paths)
+        clips = np.mean([len({n.clip for n in p}) / len(p) for p in paths])
+        found.append(f"{label}: {replayed}/{seconds} s replayed ({100 * replayed / seconds:.1f} %), "
+                     f"{clips:.2f} different clips per second")
+    return f"whole test songs, K={top_k}: " + "; ".join(found)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("checkpoint", nargs="?", default=str(DEFAULT_CHECKPOINT))
@@ -53,6 +70,7 @@ def main() -> None:
     parser.add_argument("--stride", type=float, default=2.0, help="seconds between repertoire clips")
     parser.add_argument("--save-repertoire", default=None)
     parser.add_argument("--repertoire", default=None, help="use this repertoire instead of cutting the train split")
+    parser.add_argument("--whole-songs", action="store_true", help="count replayed seconds on whole test songs")
     args = parser.parse_args()
 
     clips = load_dataset(args.data)
@@ -74,6 +92,8 @@ def main() -> None:
     mels = window_mels(test)
     windows = scoring_windows(test)
     print(selector_genre_precision(model, repertoire, windows, mels), flush=True)
+    if args.whole_songs:
+        print(whole_song_replays(generator, mels, args.top_k[0]), flush=True)
     reference = windows_as_dances(train)
     print(TABLE_HEADER.format(label="ChoreoGraph variant"), flush=True)
     for top_k in args.top_k:

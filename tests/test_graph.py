@@ -15,9 +15,9 @@ from choreo.motion.stitch import crossfade, facing_yaw, local_positions, placeme
 from choreo.music import Music
 from choreo_graph.config import GraphConfig, ModelConfig, StyleConfig, TempoConfig
 from choreo_graph.generator import ChoreoGraphGenerator
-from choreo_graph.graph import MusicWindows, search_graph
+from choreo_graph.graph import MusicWindows, replayed_nodes, search_graph
 from choreo_graph.model import ChoreoGraphModel, load_checkpoint, save_checkpoint
-from choreo_graph.repertoire import Repertoire, build_repertoire
+from choreo_graph.repertoire import Repertoire, SpeedLimits, build_repertoire
 from choreo_graph.tempo import random_time_warp
 from choreo_graph.warp import STEPS, subsequence_dtw, warp_frames
 
@@ -118,6 +118,8 @@ def test_repertoire_round_trip(tiny_graph, tmp_path):
     repertoire.save(tmp_path / "again.npz")
     again = Repertoire.load(tmp_path / "again.npz")
     np.testing.assert_allclose(again.rotations, repertoire.rotations, atol=1e-3)
+    sources, starts = again.origins  # from the "source@start" names: two dances, clips 2 s apart
+    assert list(sources) == [1] * 7 + [0] * 7 and list(starts[:3]) == [0, 60, 120]
     (tmp_path / "bad.npz").write_bytes(b"not a zip")
     with pytest.raises(Exception, match="not a readable repertoire"):
         Repertoire.load(tmp_path / "bad.npz")
@@ -137,6 +139,32 @@ def test_dynamic_graph_prefers_finishing_an_action(tiny_graph):
     assert len({node.segment for node in path[:4]}) == 1 and path[4].segment != path[3].segment
     plain = search_graph(windows, candidates, warps, repertoire, GraphConfig(dynamic=False))
     assert all(node.index == 0 for node in plain)
+
+
+def test_dynamic_graph_does_not_replay_what_it_just_danced(tiny_graph):
+    repertoire = Repertoire.load(tiny_graph[1])
+    seconds = 16
+    windows = MusicWindows(np.repeat(repertoire.style[:1], seconds, 0), np.zeros(seconds), np.zeros((seconds, 120)))
+    candidates = np.tile(np.arange(len(repertoire)), (seconds, 1))
+    warps = np.broadcast_to(np.arange(60.0, 180.0), (seconds, len(repertoire), 120))
+
+    # clip 0 is the music's style every second: without the repeat cost its first node, nearest the
+    # previous pose, is chosen again and again
+    looping = search_graph(windows, candidates, warps, repertoire, GraphConfig(completeness_cost=0.0, repeat_cost=0.0))
+    assert replayed_nodes(looping, repertoire, 30) >= seconds // 2
+    varied = search_graph(windows, candidates, warps, repertoire, GraphConfig(completeness_cost=0.0))
+    assert replayed_nodes(varied, repertoire, 30) == 0 and len({n.clip for n in varied}) > 3
+
+
+def test_speed_limits_leave_out_glitches():
+    positions = swaying_dance(8.0).joint_positions()
+    assert SpeedLimits(joint=8.0, root=3.0).admit(positions)
+    dash = positions.copy()
+    dash[100:] += [0.2, 0.0, 0.0]  # the whole body 20 cm in one frame: 6 m/s
+    assert SpeedLimits(joint=8.0).admit(dash) and not SpeedLimits(root=3.0).admit(dash)
+    flip = positions.copy()
+    flip[100:, 20] += [0.0, 0.3, 0.0]  # a wrist 30 cm in one frame: 9 m/s
+    assert SpeedLimits(root=3.0).admit(flip) and not SpeedLimits(joint=8.0).admit(flip)
 
 
 # -- the backend ---------------------------------------------------------------------------------

@@ -18,6 +18,8 @@ from choreo.metrics import (
     kinetic_features,
     motion_beats,
     normalise_by_reference,
+    same_pulse,
+    tempo_salience,
 )
 from choreo.metrics.geometric import GEOMETRIC_FRAME_TIME, HIP_WIDTH, HUMERUS, SHOULDER_WIDTH, J
 from choreo.metrics.pfc import Y_UP_TO_Z_UP
@@ -172,6 +174,24 @@ def test_beat_align_is_one_when_speed_minima_sit_on_the_beats():
     to_music, to_motion = beat_distances(music_beats, dance_beats)
     assert to_motion == pytest.approx(0.0, abs=1e-9) and to_music == pytest.approx(0.0, abs=1e-9)
     assert beat_distances(music_beats + 3, dance_beats) == pytest.approx((9.0, 9.0))
+
+
+@pytest.mark.parametrize("bpm", [60.0, 90.0, 104.4, 128.0, 144.0])
+def test_tempo_salience_is_high_at_the_rate_of_speed_minima_only(bpm):
+    frames = np.arange(1800)  # 60 s at 30 fps, speed minima every 60/bpm s: not on whole frames
+    speed = 1.05 - np.cos(2 * np.pi * frames * bpm / 60 / 30)
+    positions = np.zeros((1800, 24, 3))
+    positions[..., 0] = np.cumsum(speed)[:, None] * 0.01
+    assert tempo_salience(positions, 30.0, bpm) > 0.5
+    assert tempo_salience(positions, 30.0, bpm / 2) > 0.5  # every other beat is a beat too
+    assert tempo_salience(positions, 30.0, bpm * 1.3) < 0.2  # another tempo
+    assert tempo_salience(positions[:40], 30.0, bpm) == 0.0  # too short for a period
+
+
+def test_same_pulse_counts_half_and_double_time():
+    assert same_pulse(120.0, 120.0) and same_pulse(87.0, 174.0) and same_pulse(203.0, 102.0)
+    assert same_pulse(124.0, 120.0) and not same_pulse(126.0, 120.0)  # within 4 %, not 5 %
+    assert not same_pulse(80.0, 120.0) and not same_pulse(100.0, 0.0)
 
 
 def test_beat_align_without_beats_warns_and_scores_zero():

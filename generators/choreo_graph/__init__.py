@@ -50,15 +50,16 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, max_steps: int
 
 
 def build_repertoire_file(motions, out: str | Path, source: str, stride: int, checkpoint: str | Path | None = None,
-                          max_speed: float | None = None, progress=None):
+                          limits=None, progress=None):
     """Cut, describe (with the bundled or given models) and save a repertoire; returns it.
 
-    ``motions`` are (name, motion at 30 fps, genre) triples; ``stride`` is in frames."""
+    ``motions`` are (name, motion at 30 fps, genre) triples; ``stride`` is in frames; ``limits``
+    a ``SpeedLimits`` (none by default)."""
     from .model import load_checkpoint
-    from .repertoire import build_repertoire
+    from .repertoire import SpeedLimits, build_repertoire
 
     model, _ = load_checkpoint(checkpoint or DEFAULT_CHECKPOINT)
-    repertoire = build_repertoire(motions, model, stride, source, progress, max_speed)
+    repertoire = build_repertoire(motions, model, stride, source, progress, limits or SpeedLimits())
     repertoire.save(out)
     return repertoire
 

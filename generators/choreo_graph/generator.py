@@ -15,7 +15,7 @@ from choreo.motion import Motion
 from choreo.music.mel import music_log_mel
 
 from .config import NODE_FRAMES, GraphConfig
-from .graph import DynamicGraph, assemble, music_windows, select_candidates, warp_candidates
+from .graph import DynamicGraph, Node, assemble, music_windows, select_candidates, warp_candidates
 from .model import ChoreoGraphModel, load_checkpoint
 from .repertoire import Repertoire
 
@@ -80,7 +80,14 @@ class ChoreoGraphGenerator(Generator):
 
     def dance(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
               progress: Callable[[float], None] = lambda fraction: None) -> Motion:
-        """The whole pipeline on a (T, n_mels) log-mel: T frames of motion.
+        """The whole pipeline on a (T, n_mels) log-mel: T frames of motion."""
+        motion = assemble(self.walk(mel, config, allowed, progress), self.repertoire, config.blend_frames)
+        progress(1.0)
+        return motion.slice_frames(0, len(mel))
+
+    def walk(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
+             progress: Callable[[float], None] = lambda fraction: None) -> list[Node]:
+        """The graph's path, one node per second of the (T, n_mels) log-mel.
 
         Seconds are processed in chunks (select, warp, then walk the graph through them), so only
         a chunk's candidates and warps are ever held, whatever the song's length.
@@ -96,6 +103,4 @@ class ChoreoGraphGenerator(Generator):
                 graph.insert(t, candidates[i], warps[i])
                 path.append(graph.step(t, windows.style[i]))
             progress(0.9 * chunk.stop / seconds)
-        motion = assemble(path, self.repertoire, config.blend_frames)
-        progress(1.0)
-        return motion.slice_frames(0, len(mel))
+        return path

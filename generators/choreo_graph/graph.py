@@ -8,7 +8,9 @@ style + action-completeness + transition cost (eqs. 4-7); segments older than 3 
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass
+
 import numpy as np
 import torch
 
@@ -22,6 +24,7 @@ from .repertoire import MIDDLE, Repertoire
 from .warp import warp_frames
 
 NODES_PER_SEGMENT = WINDOW_FRAMES // NODE_FRAMES  # 4
+REPEAT_OVERLAP = NODE_FRAMES // 4  # source frames two nodes may share before one repeats the other
 WARP_CHUNK = 4096  # candidate pairs warped at once (bounds memory: ~4096 x 60 x 120 floats)
 
 
@@ -101,12 +104,18 @@ def completeness_cost(current: Node, segment_warp: np.ndarray, repertoire: Reper
 
 class DynamicGraph:
     """The graph as it moves through the song: the segments of second t enter at t and leave
-    after t + 3, so memory does not grow with the song (the paper's node removal)."""
+    after t + 3, so memory does not grow with the song (the paper's node removal).
+
+    One cost the paper does not have: a node that replays source frames danced in the last
+    ``repeat_memory`` seconds costs ``repeat_cost`` more. Without it a clip that tops the style
+    ranking every second, and whose end joins its own start, is replayed second after second
+    (a 30 s rumba excerpt got one node 24 times in a row)."""
 
     def __init__(self, repertoire: Repertoire, config: GraphConfig):
         self.repertoire, self.config = repertoire, config
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))
         self.current: Node | None = None
+        self.played: deque[tuple[int, int, float, float]] = deque()  # (second, source id, first, last source frame)
 
     def insert(self, second: int, clips: np.ndarray, warps: np.ndarray) -> None:
         self.segments[second] = (clips, warps)
@@ -138,11 +147,32 @@ class DynamicGraph:
                     own = warps[np.flatnonzero(follows)[0]]
                     completeness[follows] = completeness_cost(current, own, repertoire, config.completeness_scale)
                 cost += config.completeness_cost * completeness
+        last = warps[np.arange(len(clips)), index * NODE_FRAMES + NODE_FRAMES - 1]
+        cost += self.repeat_cost(t, clips, first, last)
         best = int(cost.argmin())
         start = int(index[best]) * NODE_FRAMES
         self.current = Node((int(segment_time[best]), int(rank[best])), int(index[best]), int(clips[best]),
                             warps[best, start : start + NODE_FRAMES].copy())
+        self.remember(t, self.current)
         return self.current
+
+    def repeat_cost(self, t: int, clips: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """``repeat_cost`` for each node whose source frames overlap ones played recently."""
+        while self.played and self.played[0][0] <= t - self.config.repeat_memory:
+            self.played.popleft()
+        if not self.played or self.config.repeat_cost == 0:
+            return np.zeros(len(clips))
+        sources, starts = self.repertoire.origins
+        played = np.array(self.played)
+        begin, end = starts[clips] + first, starts[clips] + last
+        overlap = np.minimum(end[:, None], played[:, 3]) - np.maximum(begin[:, None], played[:, 2])
+        repeats = ((sources[clips][:, None] == played[:, 1]) & (overlap > REPEAT_OVERLAP)).any(1)
+        return self.config.repeat_cost * repeats
+
+    def remember(self, t: int, node: Node) -> None:
+        sources, starts = self.repertoire.origins
+        offset = starts[node.clip]
+        self.played.append((t, int(sources[node.clip]), offset + float(node.frames[0]), offset + float(node.frames[-1])))
 
 
 def search_graph(windows: MusicWindows, candidates: np.ndarray, warps: np.ndarray, repertoire: Repertoire,
@@ -153,6 +183,16 @@ def search_graph(windows: MusicWindows, candidates: np.ndarray, warps: np.ndarra
         graph.insert(t, candidates[t], warps[t])
         path.append(graph.step(t, windows.style[t]))
     return path
+
+
+def replayed_nodes(path: list[Node], repertoire: Repertoire, memory: int) -> int:
+    """How many nodes of a path replay source frames (more than ``REPEAT_OVERLAP``) that one of
+    the ``memory`` nodes before it played: the looping the repeat cost is there to prevent."""
+    sources, starts = repertoire.origins
+    spans = [(sources[n.clip], starts[n.clip] + n.frames[0], starts[n.clip] + n.frames[-1]) for n in path]
+    return sum(any(source == other and min(end, other_end) - max(begin, other_begin) > REPEAT_OVERLAP
+                   for other, other_begin, other_end in spans[max(0, i - memory) : i])
+               for i, (source, begin, end) in enumerate(spans))
 
 
 def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Motion:

@@ -8,6 +8,7 @@ select it) and its 8 s tempo-density (to warp it). Stored as a plain .npz (no pi
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import cached_property
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -48,6 +49,18 @@ class Repertoire:
         return Motion(self.root_positions[index], self.rotations[index], fps=FPS,
                       skeleton=SMPL24.with_offsets(self.offsets))
 
+    @cached_property
+    def origins(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per clip, an id of the motion it was cut from and the frame it starts at there (from
+        the "source@start" names): clips cut from one motion overlap, and this says where."""
+        def split(name: str) -> tuple[str, int]:
+            source, _, start = name.rpartition("@")
+            return (source, int(start)) if source and start.isdigit() else (name, 0)
+
+        sources, starts = zip(*(split(str(name)) for name in self.names))
+        _, ids = np.unique(np.array(sources), return_inverse=True)
+        return ids.astype(np.int64), np.array(starts, np.int64)
+
     def genre_mask(self, genre: str | None) -> np.ndarray:
         return np.ones(len(self), bool) if genre is None else self.genres == genre
 
@@ -79,25 +92,33 @@ class Repertoire:
         return repertoire
 
 
-def fastest_joint_speed(positions: np.ndarray) -> float:
-    """Metres per second of the fastest joint between any two frames of a 30 fps clip."""
-    return float(np.linalg.norm(np.diff(positions, axis=0), axis=-1).max() * FPS)
+@dataclass(frozen=True)
+class SpeedLimits:
+    """Clips moving faster than this (m/s, between any two frames) are left out of a repertoire:
+    glitches that warping (up to twice as fast) would only make worse."""
+
+    joint: float | None = None  # any joint: a limb flipping between two frames
+    root: float | None = None  # the root: the whole body dashing off faster than anyone travels
+
+    def admit(self, positions: np.ndarray) -> bool:
+        """Whether a clip's (frames, joints, 3) world positions at 30 fps stay within the limits."""
+        speed = np.linalg.norm(np.diff(positions, axis=0), axis=-1) * FPS
+        return ((self.joint is None or speed.max() <= self.joint)
+                and (self.root is None or speed[:, 0].max() <= self.root))
 
 
 def build_repertoire(motions: Sequence[tuple[str, Motion, str | None]], model: ChoreoGraphModel, stride: int,
                      source: str, progress: Callable[[int, int], None] | None = None,
-                     max_speed: float | None = None) -> Repertoire:
+                     limits: SpeedLimits = SpeedLimits()) -> Repertoire:
     """Cut every 8 s clip (``stride`` frames apart) from (name, motion at 30 fps, genre) and
-    describe it with ``model``. All motions are played on the first one's skeleton.
-
-    ``max_speed`` (m/s) leaves out clips where a joint ever moves faster: glitches (a limb
-    flipping between two frames) that warping would only make faster."""
+    describe it with ``model``, leaving out clips faster than ``limits``. All motions are played
+    on the first one's skeleton."""
     names, genres, roots, rotations, positions = [], [], [], [], []
     for name, motion, genre in motions:
         world = motion.joint_positions()
         for start in excerpt_starts(motion.num_frames, CLIP_FRAMES, stride):
             stop = start + CLIP_FRAMES
-            if max_speed is not None and fastest_joint_speed(world[start:stop]) > max_speed:
+            if not limits.admit(world[start:stop]):
                 continue
             names.append(f"{name}@{start}")
             genres.append(genre or "")

@@ -66,6 +66,7 @@ def graph_build(
     split: str = typer.Option("train", help="Dataset split to use: train, test or all."),
     stride: float = typer.Option(2.0, help="Seconds between the starts of consecutive 8 s clips."),
     max_speed: Optional[float] = typer.Option(None, help="Leave out clips where a joint ever moves faster (m/s): glitches."),
+    max_root_speed: Optional[float] = typer.Option(None, help="Leave out clips where the root ever moves faster (m/s)."),
     checkpoint: Optional[Path] = CHECKPOINT,
 ) -> None:
     """Build a repertoire: every 8 s clip of a dataset split or of given motions, described by the models.
@@ -75,6 +76,7 @@ def graph_build(
       choreo graph build --motion a.bvh --motion b.bvh --genre waltz -o mine.npz --stride 1
     """
     from choreo_graph import build_repertoire_file
+    from choreo_graph.repertoire import SpeedLimits
 
     from ..constraints import as_smpl
     from ..errors import ParameterError
@@ -83,8 +85,8 @@ def graph_build(
 
     if (data is None) == (not motions):
         raise ParameterError("give either --data or --motion files")
-    if stride <= 0 or (max_speed is not None and max_speed <= 0):
-        raise ParameterError("--stride and --max-speed must be positive")
+    if stride <= 0 or any(limit is not None and limit <= 0 for limit in (max_speed, max_root_speed)):
+        raise ParameterError("--stride, --max-speed and --max-root-speed must be positive")
     check_output_dir(output)
     if data is not None:
         from ..datasets import load_dataset, select_split
@@ -97,5 +99,5 @@ def graph_build(
         source = f"{len(motions)} motion files"
     with progress_bar("describing clips") as update:
         repertoire = build_repertoire_file(sources, output, source, max(1, round(stride * 30)), checkpoint,
-                                           max_speed, update)
+                                           SpeedLimits(max_speed, max_root_speed), update)
     stderr_console.print(f"wrote {output}: {len(repertoire)} clips of 8 s from {source}", highlight=False)

@@ -4,7 +4,7 @@ The scoring protocol on datasets (`choreo.metrics.protocol`) is imported on its 
 dataset readers, which the metrics themselves do not.
 """
 
-from .beats import MetricWarning, beat_align_score, beat_distances, mean_joint_speed, motion_beats
+from .beats import MetricWarning, beat_align_score, beat_distances, mean_joint_speed, motion_beats, same_pulse, tempo_salience
 from .evaluate import Dance, DanceScore, EvaluationReport, evaluate, resample_positions
 from .fid import diversity, frechet_distance, motion_features, normalise_by_reference, prepare_positions
 from .geometric import geometric_features
@@ -15,5 +15,5 @@ __all__ = [
     "Dance", "DanceScore", "EvaluationReport", "MetricWarning", "beat_align_score", "beat_distances",
     "diversity", "evaluate", "foot_contact_score", "frechet_distance", "geometric_features", "kinetic_features",
     "mean_joint_speed", "motion_beats", "motion_features", "normalise_by_reference", "physical_foot_contact",
-    "prepare_positions", "resample_positions",
+    "prepare_positions", "resample_positions", "same_pulse", "tempo_salience",
 ]  # fmt: skip

@@ -14,6 +14,9 @@ from scipy.signal import argrelextrema
 
 SPEED_SMOOTHING_SIGMA = 5.0  # frames, as in the reference code
 BEAT_ALIGN_SIGMA = 3.0  # frames: 100 ms at 30 fps (50 ms at 60 fps)
+METRICAL_RATIOS = (0.5, 1.0, 2.0)  # the same pulse, counted every other beat or twice per beat
+LOCK_TOLERANCE = 0.04  # relative tempo difference still counted as the same (MIREX allows 8 %)
+BEAT_TRAIN_SIGMA = 1.0  # frames
 
 
 class MetricWarning(UserWarning):
@@ -31,6 +34,33 @@ def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIG
         return np.zeros(0, dtype=int)
     speed = gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
     return argrelextrema(speed, np.less, order=1)[0]
+
+
+def motion_beat_train(joint_positions: np.ndarray) -> np.ndarray:
+    """(T,) the dance's motion beats as narrow bumps (so a beat a frame off still correlates)."""
+    train = np.zeros(len(joint_positions))
+    train[motion_beats(joint_positions)] = 1.0
+    return gaussian_filter1d(train, BEAT_TRAIN_SIGMA)
+
+
+def tempo_salience(joint_positions: np.ndarray, fps: float, bpm: float) -> float:
+    """How strongly a dance's motion beats recur at a tempo: the normalised autocorrelation of
+    its motion-beat train at one or two beat periods of ``bpm`` (the larger; fractional lags
+    interpolated). 1 for beats exactly that far apart, near 0 for beats unrelated to it."""
+    train = motion_beat_train(joint_positions)
+    train = train - train.mean()
+    period = 60.0 * fps / bpm
+    if bpm <= 0 or len(train) <= 4 * period or not train.any():
+        return 0.0
+    spectrum = np.fft.rfft(train, 2 * len(train))
+    autocorrelation = np.fft.irfft(spectrum * np.conj(spectrum))[: int(2 * period) + 2]
+    lags = np.arange(len(autocorrelation))
+    return float(max(np.interp(m * period, lags, autocorrelation) for m in (1, 2)) / autocorrelation[0])
+
+
+def same_pulse(bpm: float, other_bpm: float, tolerance: float = LOCK_TOLERANCE) -> bool:
+    """Whether two tempi are the same pulse: equal, half or double within ``tolerance``."""
+    return other_bpm > 0 and any(abs(bpm / (ratio * other_bpm) - 1.0) <= tolerance for ratio in METRICAL_RATIOS)
 
 
 def _nearest_distances(queries: np.ndarray, references: np.ndarray) -> np.ndarray:

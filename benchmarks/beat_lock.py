@@ -1,0 +1,118 @@
+"""Beat-rate lock on songs from outside M2D whose tempo is known (LMMS's demo songs).
+
+    python benchmarks/beat_lock.py [--seconds 60] [--m2d ../shared/data/m2d]   # needs `apt-get install lmms`
+
+Each song (a minute from 10 s in) is danced by both bundled generators with their defaults. How
+strongly a dance's motion beats recur at a tempo is `choreo.metrics.tempo_salience`. A dance is
+locked to its song when its beats recur more strongly at its own song's tempo than at another
+song's: the share of (dance, other song) pairs where that holds is 50 % for dances that ignore
+the tempo and 100 % for perfect lock (pairs whose tempi are the same pulse are skipped). The
+same share for real dancers is the reference: M2D's clips against the tempo choreo's analysis
+hears in their music (M2D states no tempo). Also printed: how often that analysis hears the
+stated tempo of the outside songs (the generators dance to what it hears).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from choreo.generator import GenerationRequest
+from choreo.metrics import same_pulse, tempo_salience
+from choreo.music import Music, audio_duration
+
+sys.path.insert(0, str(Path(__file__).parent))
+from outside_songs import outside_songs  # noqa: E402
+
+SKIP_SECONDS = 10.0  # past the intro
+
+
+@dataclass
+class Danced:
+    name: str
+    bpm: float  # the song's tempo: stated (outside songs) or heard (M2D)
+    heard_bpm: float  # what choreo's music analysis hears
+    dances: dict[str, np.ndarray]  # joint positions at 30 fps, per dancer
+
+
+def generators() -> dict:
+    import choreo_graph
+    import choreo_sgmd
+    from choreo_graph.generator import ChoreoGraphGenerator
+    from choreo_sgmd.generator import SGMDGenerator
+
+    return {"SGMD": SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT),
+            "ChoreoGraph": ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT)}
+
+
+def dance_outside_songs(seconds: float) -> list[Danced]:
+    backends, danced = generators(), []
+    for song in outside_songs():
+        skip = SKIP_SECONDS if audio_duration(song.path) >= SKIP_SECONDS + 20 else 0.0
+        music = Music.from_file(song.path, start=skip, end=skip + seconds)
+        dances = {name: backend.generate(GenerationRequest(music, seed=0)).joint_positions()
+                  for name, backend in backends.items()}
+        danced.append(Danced(song.name, song.bpm, music.tempo, dances))
+        print(f"danced {song.name} ({song.bpm:g} bpm, heard {music.tempo:.1f})", flush=True)
+    return danced
+
+
+def real_m2d_dancers(data: Path) -> list[Danced]:
+    from choreo.datasets import load_dataset
+
+    danced = []
+    for clip in (c for c in load_dataset(data) if c.audio_path):
+        music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
+        danced.append(Danced(clip.name, music.tempo, music.tempo, {"real dancers": clip.motion.joint_positions()}))
+    return danced
+
+
+def own_tempo_wins(danced: list[Danced], dancer: str) -> float:
+    """Share of (dance, other song) pairs where the dance's beats recur more at its own song's tempo."""
+    wins = [tempo_salience(d.dances[dancer], 30.0, d.bpm) > tempo_salience(d.dances[dancer], 30.0, other.bpm)
+            for d in danced for other in danced if not same_pulse(other.bpm, d.bpm)]
+    return float(np.mean(wins)) if wins else float("nan")
+
+
+def markdown(outside: list[Danced], real: list[Danced]) -> list[str]:
+    names = list(outside[0].dances)
+    heard = np.mean([same_pulse(d.heard_bpm, d.bpm) for d in outside])
+    lines = [
+        "| song | stated bpm | heard by choreo | " + " | ".join(f"{n}: salience at the song's tempo" for n in names) + " |",
+        "| --- | ---: | ---: | " + " | ".join("---:" for _ in names) + " |",
+        *(f"| {d.name} | {d.bpm:g} | {d.heard_bpm:.1f}{'' if same_pulse(d.heard_bpm, d.bpm) else ' (wrong)'} | "
+          + " | ".join(f"{tempo_salience(d.dances[n], 30.0, d.bpm):.2f}" for n in names) + " |" for d in outside),
+        "",
+        "| dancer | songs | beats recur more at their own song's tempo than at another's (50 % = no lock) |",
+        "| --- | ---: | ---: |",
+        *(f"| {n} (outside songs, stated tempo) | {len(outside)} | {100 * own_tempo_wins(outside, n):.0f} % |" for n in names),
+    ]
+    if real:
+        lines.append(f"| real dancers (M2D clips, tempo heard by choreo) | {len(real)} | "
+                     f"{100 * own_tempo_wins(real, 'real dancers'):.0f} % |")
+    lines += ["", f"choreo's music analysis hears the stated tempo (or half or double it, within 4 %) in "
+              f"{100 * heard:.0f} % of the outside songs."]
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--m2d", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "data" / "m2d")
+    args = parser.parse_args()
+    started = time.perf_counter()
+    outside = dance_outside_songs(args.seconds)
+    if not outside:
+        raise SystemExit("no LMMS demo songs: `apt-get install lmms` first")
+    real = real_m2d_dancers(args.m2d) if args.m2d.is_dir() else []
+    print("\n".join(markdown(outside, real)))
+    print(f"({time.perf_counter() - started:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
