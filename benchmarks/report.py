@@ -33,7 +33,7 @@ from choreo.metrics.protocol import TABLE_HEADER, music_beats, score, scoring_wi
 from choreo.music import Music
 
 sys.path.insert(0, str(Path(__file__).parent))
-from beat_lock import dance_outside_songs, markdown as beat_lock_table, real_m2d_dancers  # noqa: E402
+from beat_lock import dance_outside_songs, m2d_dancers, markdown as beat_lock_table  # noqa: E402
 from common import REPO, cli_peak_rss, write_song  # noqa: E402
 
 EDGE_CHECKPOINT = REPO / "checkpoints" / "sgmd-edge-m2d.pt"
@@ -174,7 +174,7 @@ def main() -> None:
 
     print("beat-rate lock on outside songs...", flush=True)
     outside = dance_outside_songs(60.0)
-    lock_lines = (beat_lock_table(outside, real_m2d_dancers(Path(args.data))) if outside else
+    lock_lines = (beat_lock_table(outside, m2d_dancers(Path(args.data))) if outside else
                   ["Not measured in this run: LMMS is not installed (`apt-get install lmms`, then run again)."])
 
     print("speed and memory...", flush=True)
