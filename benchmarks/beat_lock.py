@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -94,6 +94,7 @@ def lock_row(label: str, danced: list[Danced], dancer: str) -> str:
 
 def markdown(outside: list[Danced], m2d: list[Danced]) -> list[str]:
     names = list(outside[0].dances)
+    as_heard = [replace(d, bpm=d.heard_bpm) for d in outside]  # what the generators were given
     heard = np.mean([same_pulse(d.heard_bpm, d.bpm) for d in outside])
     lines = [
         "| song | stated bpm | heard by choreo | " + " | ".join(f"{n}: salience at the song's tempo" for n in names) + " |",
@@ -104,6 +105,7 @@ def markdown(outside: list[Danced], m2d: list[Danced]) -> list[str]:
         "| dancer | songs | beats recur more at their own song's tempo than at another's (50 % = no lock) |",
         "| --- | ---: | ---: |",
         *(lock_row("outside songs, stated tempo", outside, n) for n in names),
+        *(lock_row("outside songs, tempo heard by choreo", as_heard, n) for n in names),
     ]
     if m2d:
         test = [d for d in m2d if len(d.dances) > 1]
