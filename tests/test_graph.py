@@ -228,6 +228,11 @@ def test_cli_graph_and_build(tiny_graph, tmp_path, capsys):
     assert main(["graph", "build", "--motion", str(dance), "--genre", "waltz", "--checkpoint", str(checkpoint),
                  "-o", str(built)]) == 0
     assert len(Repertoire.load(built)) == 2
+    capsys.readouterr()
+    too_slow = tmp_path / "none.npz"  # the swaying dance travels at up to 0.3 m/s: nothing passes 0.1
+    assert main(["graph", "build", "--motion", str(dance), "--checkpoint", str(checkpoint), "--max-root-speed", "0.1",
+                 "-o", str(too_slow)]) != 0
+    assert "faster than the speed limit" in capsys.readouterr().err and not too_slow.exists()
     out = tmp_path / "dance.npz"
     code = main(["graph", str(SONG), "-o", str(out), "--checkpoint", str(checkpoint), "--repertoire", str(built), "-k", "2"])
     assert code == 0 and out.exists()
