@@ -74,6 +74,7 @@ def graph_build(
     Examples:
       choreo graph build --data ../shared/data/m2d -o m2d_train.npz
       choreo graph build --motion a.bvh --motion b.bvh --genre waltz -o mine.npz --stride 1
+      choreo graph build --motion gen.bvh --max-speed 8 --max-root-speed 3 -o clean.npz   # drop glitchy clips
     """
     from choreo_graph import build_repertoire_file
     from choreo_graph.repertoire import SpeedLimits
