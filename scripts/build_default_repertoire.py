@@ -3,8 +3,9 @@
     python scripts/build_default_repertoire.py [--data ../shared/data/m2d] [--out generators/choreo_graph/weights/repertoire-sgmd.npz]
 
 M2D motion may not be redistributed, so the shipped repertoire holds no M2D frame: for each genre
-the bundled SGMD checkpoint dances (seed 0, default sampler) to 40 s excerpts of M2D train-split
-songs, styled with that genre, and every 8 s clip of those dances (2 s apart) is described by the
+the bundled SGMD checkpoint dances (seed 0, default sampler) to the first three M2D train-split
+songs of that genre (the whole clip's music; tango has one), styled with that genre, and every
+8 s clip of those dances (2 s apart) is described by the
 bundled ChoreoGraph models, leaving out clips where a joint ever moves faster than 8 m/s (a limb
 flipping between two frames) or the root faster than 3 m/s (a dash no ballroom dancer makes, which
 warping can make twice as fast). Only generated motion is stored, never the songs or their features.
@@ -24,8 +25,7 @@ from choreo_sgmd import DEFAULT_CHECKPOINT as SGMD_CHECKPOINT
 from choreo_sgmd.generator import SGMDGenerator
 
 REPO = Path(__file__).resolve().parents[1]
-SONGS_PER_GENRE = 2
-EXCERPT_SECONDS = 40.0
+SONGS_PER_GENRE = 3  # enough material that a walk restricted to one genre need not replay itself
 LIMITS = SpeedLimits(joint=8.0, root=3.0)  # m/s: SGMD's limb flips and dashes are left out
 
 
@@ -40,7 +40,7 @@ def main() -> None:
     dances = []
     for genre in sorted({c.genre for c in clips}):
         for clip in [c for c in clips if c.genre == genre][:SONGS_PER_GENRE]:
-            music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + EXCERPT_SECONDS)
+            music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
             motion = sgmd.generate(GenerationRequest(music, style=genre, seed=0))
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
