@@ -24,13 +24,15 @@ from pathlib import Path
 import numpy as np
 
 from choreo.generator import GenerationRequest
-from choreo.metrics import same_pulse, tempo_salience
+from choreo.metrics import beat_autocorrelation, salience_at, same_pulse
 from choreo.music import Music, audio_duration
 
 sys.path.insert(0, str(Path(__file__).parent))
 from outside_songs import outside_songs  # noqa: E402
 
 SKIP_SECONDS = 10.0  # past the intro
+FPS = 30.0
+SLOWEST_BPM = 40.0  # the beat autocorrelation of each dance is kept up to two periods of this
 
 
 @dataclass
@@ -38,7 +40,11 @@ class Danced:
     name: str
     bpm: float  # the song's tempo: stated (outside songs) or heard (M2D)
     heard_bpm: float  # what choreo's music analysis hears
-    dances: dict[str, np.ndarray]  # joint positions at 30 fps, per dancer
+    dances: dict[str, np.ndarray]  # each dancer's beat autocorrelation (read at any tempo)
+
+
+def beat_profile(joint_positions: np.ndarray) -> np.ndarray:
+    return beat_autocorrelation(joint_positions, int(2 * 60.0 * FPS / SLOWEST_BPM) + 1)
 
 
 def generators() -> dict:
@@ -52,7 +58,8 @@ def generators() -> dict:
 
 
 def generated(backends: dict, music: Music) -> dict[str, np.ndarray]:
-    return {name: backend.generate(GenerationRequest(music, seed=0)).joint_positions() for name, backend in backends.items()}
+    return {name: beat_profile(backend.generate(GenerationRequest(music, seed=0)).joint_positions())
+            for name, backend in backends.items()}
 
 
 def dance_outside_songs(seconds: float) -> list[Danced]:
@@ -65,14 +72,14 @@ def dance_outside_songs(seconds: float) -> list[Danced]:
     return danced
 
 
-def m2d_dancers(data: Path) -> list[Danced]:
+def m2d_dancers(clips) -> list[Danced]:
     """Every M2D clip's real dance; test clips also danced by both generators to the same music."""
-    from choreo.datasets import TEST, load_dataset
+    from choreo.datasets import TEST
 
     backends, danced = generators(), []
-    for clip in (c for c in load_dataset(data) if c.audio_path):
+    for clip in (c for c in clips if c.audio_path):
         music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
-        dances = {"real dancers": clip.motion.joint_positions()}
+        dances = {"real dancers": beat_profile(clip.motion.joint_positions())}
         if clip.split == TEST:
             dances |= generated(backends, music)
         danced.append(Danced(clip.name, music.tempo, music.tempo, dances))
@@ -82,7 +89,7 @@ def m2d_dancers(data: Path) -> list[Danced]:
 def own_tempo_wins(danced: list[Danced], dancer: str) -> float:
     """Share of (dance, other song) pairs where the dance's beats recur more at its own song's tempo."""
     danced = [d for d in danced if dancer in d.dances]
-    wins = [tempo_salience(d.dances[dancer], 30.0, d.bpm) > tempo_salience(d.dances[dancer], 30.0, other.bpm)
+    wins = [salience_at(d.dances[dancer], FPS, d.bpm) > salience_at(d.dances[dancer], FPS, other.bpm)
             for d in danced for other in danced if not same_pulse(other.bpm, d.bpm)]
     return float(np.mean(wins)) if wins else float("nan")
 
@@ -100,7 +107,7 @@ def markdown(outside: list[Danced], m2d: list[Danced]) -> list[str]:
         "| song | stated bpm | heard by choreo | " + " | ".join(f"{n}: salience at the song's tempo" for n in names) + " |",
         "| --- | ---: | ---: | " + " | ".join("---:" for _ in names) + " |",
         *(f"| {d.name} | {d.bpm:g} | {d.heard_bpm:.1f}{'' if same_pulse(d.heard_bpm, d.bpm) else ' (wrong)'} | "
-          + " | ".join(f"{tempo_salience(d.dances[n], 30.0, d.bpm):.2f}" for n in names) + " |" for d in outside),
+          + " | ".join(f"{salience_at(d.dances[n], FPS, d.bpm):.2f}" for n in names) + " |" for d in outside),
         "",
         "| dancer | songs | beats recur more at their own song's tempo than at another's (50 % = no lock) |",
         "| --- | ---: | ---: |",
@@ -125,7 +132,12 @@ def main() -> None:
     outside = dance_outside_songs(args.seconds)
     if not outside:
         raise SystemExit("no LMMS demo songs: `apt-get install lmms` first")
-    m2d = m2d_dancers(args.m2d) if args.m2d.is_dir() else []
+    if args.m2d.is_dir():
+        from choreo.datasets import load_dataset
+
+        m2d = m2d_dancers(load_dataset(args.m2d))
+    else:
+        m2d = []
     print("\n".join(markdown(outside, m2d)))
     print(f"({time.perf_counter() - started:.0f} s)")
 

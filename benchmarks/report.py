@@ -174,7 +174,7 @@ def main() -> None:
 
     print("beat-rate lock on outside songs...", flush=True)
     outside = dance_outside_songs(60.0)
-    lock_lines = (beat_lock_table(outside, m2d_dancers(Path(args.data))) if outside else
+    lock_lines = (beat_lock_table(outside, m2d_dancers(clips)) if outside else
                   ["Not measured in this run: LMMS is not installed (`apt-get install lmms`, then run again)."])
 
     print("speed and memory...", flush=True)

@@ -9,6 +9,7 @@ from choreo.metrics import (
     Dance,
     MetricWarning,
     beat_align_score,
+    beat_autocorrelation,
     beat_distances,
     diversity,
     evaluate,
@@ -18,6 +19,7 @@ from choreo.metrics import (
     kinetic_features,
     motion_beats,
     normalise_by_reference,
+    salience_at,
     same_pulse,
     tempo_salience,
 )
@@ -186,6 +188,9 @@ def test_tempo_salience_is_high_at_the_rate_of_speed_minima_only(bpm):
     assert tempo_salience(positions, 30.0, bpm / 2) > 0.5  # every other beat is a beat too
     assert tempo_salience(positions, 30.0, bpm * 1.3) < 0.2  # another tempo
     assert tempo_salience(positions[:40], 30.0, bpm) == 0.0  # too short for a period
+    once = beat_autocorrelation(positions, 200)  # computed once, read at any tempo: the same numbers
+    for tempo in (bpm, bpm / 2, bpm * 1.3):
+        assert salience_at(once, 30.0, tempo) == pytest.approx(tempo_salience(positions, 30.0, tempo))
 
 
 def test_same_pulse_counts_half_and_double_time():

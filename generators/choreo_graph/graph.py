@@ -115,7 +115,7 @@ class DynamicGraph:
         self.repertoire, self.config = repertoire, config
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))
         self.current: Node | None = None
-        self.played: deque[tuple[int, int, float, float]] = deque()  # (second, source id, first, last source frame)
+        self.played: deque[tuple[int, np.ndarray]] = deque()  # (second, source span of the node played)
 
     def insert(self, second: int, clips: np.ndarray, warps: np.ndarray) -> None:
         self.segments[second] = (clips, warps)
@@ -148,7 +148,7 @@ class DynamicGraph:
                     completeness[follows] = completeness_cost(current, own, repertoire, config.completeness_scale)
                 cost += config.completeness_cost * completeness
         last = warps[np.arange(len(clips)), index * NODE_FRAMES + NODE_FRAMES - 1]
-        cost += self.repeat_cost(t, clips, first, last)
+        cost += self.repeat_cost(t, source_spans(repertoire, clips, first, last))
         best = int(cost.argmin())
         start = int(index[best]) * NODE_FRAMES
         self.current = Node((int(segment_time[best]), int(rank[best])), int(index[best]), int(clips[best]),
@@ -156,23 +156,30 @@ class DynamicGraph:
         self.remember(t, self.current)
         return self.current
 
-    def repeat_cost(self, t: int, clips: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
-        """``repeat_cost`` for each node whose source frames overlap ones played recently."""
+    def repeat_cost(self, t: int, spans: np.ndarray) -> np.ndarray:
+        """``repeat_cost`` for each node (``source_spans``) replaying frames played recently."""
         while self.played and self.played[0][0] <= t - self.config.repeat_memory:
             self.played.popleft()
         if not self.played or self.config.repeat_cost == 0:
-            return np.zeros(len(clips))
-        sources, starts = self.repertoire.origins
-        played = np.array(self.played)
-        begin, end = starts[clips] + first, starts[clips] + last
-        overlap = np.minimum(end[:, None], played[:, 3]) - np.maximum(begin[:, None], played[:, 2])
-        repeats = ((sources[clips][:, None] == played[:, 1]) & (overlap > REPEAT_OVERLAP)).any(1)
-        return self.config.repeat_cost * repeats
+            return np.zeros(len(spans))
+        return self.config.repeat_cost * replaying(spans, np.array([span for _, span in self.played]))
 
     def remember(self, t: int, node: Node) -> None:
-        sources, starts = self.repertoire.origins
-        offset = starts[node.clip]
-        self.played.append((t, int(sources[node.clip]), offset + float(node.frames[0]), offset + float(node.frames[-1])))
+        self.played.append((t, source_spans(self.repertoire, node.clip, node.frames[0], node.frames[-1])))
+
+
+def source_spans(repertoire: Repertoire, clips, first, last) -> np.ndarray:
+    """(..., 3) what nodes play in source terms: motion id, first and last frame in that motion
+    (clips cut from one motion overlap, so a replay can come from another clip)."""
+    sources, starts = repertoire.origins
+    return np.stack(np.broadcast_arrays(sources[clips], starts[clips] + first, starts[clips] + last), -1).astype(float)
+
+
+def replaying(spans: np.ndarray, played: np.ndarray) -> np.ndarray:
+    """(N,) whether each of ``spans`` (N, 3) shares more than ``REPEAT_OVERLAP`` frames of the
+    same motion with any of ``played`` (M, 3)."""
+    overlap = np.minimum(spans[:, None, 2], played[:, 2]) - np.maximum(spans[:, None, 1], played[:, 1])
+    return ((spans[:, None, 0] == played[:, 0]) & (overlap > REPEAT_OVERLAP)).any(1)
 
 
 def search_graph(windows: MusicWindows, candidates: np.ndarray, warps: np.ndarray, repertoire: Repertoire,
@@ -186,13 +193,10 @@ def search_graph(windows: MusicWindows, candidates: np.ndarray, warps: np.ndarra
 
 
 def replayed_nodes(path: list[Node], repertoire: Repertoire, memory: int) -> int:
-    """How many nodes of a path replay source frames (more than ``REPEAT_OVERLAP``) that one of
-    the ``memory`` nodes before it played: the looping the repeat cost is there to prevent."""
-    sources, starts = repertoire.origins
-    spans = [(sources[n.clip], starts[n.clip] + n.frames[0], starts[n.clip] + n.frames[-1]) for n in path]
-    return sum(any(source == other and min(end, other_end) - max(begin, other_begin) > REPEAT_OVERLAP
-                   for other, other_begin, other_end in spans[max(0, i - memory) : i])
-               for i, (source, begin, end) in enumerate(spans))
+    """How many nodes of a path replay what one of the ``memory`` nodes before it played: the
+    looping the repeat cost is there to prevent."""
+    spans = np.stack([source_spans(repertoire, n.clip, n.frames[0], n.frames[-1]) for n in path])
+    return sum(bool(replaying(spans[i : i + 1], spans[max(0, i - memory) : i])[0]) for i in range(1, len(path)))
 
 
 def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Motion:

@@ -43,19 +43,35 @@ def motion_beat_train(joint_positions: np.ndarray) -> np.ndarray:
     return gaussian_filter1d(train, BEAT_TRAIN_SIGMA)
 
 
-def tempo_salience(joint_positions: np.ndarray, fps: float, bpm: float) -> float:
-    """How strongly a dance's motion beats recur at a tempo: the normalised autocorrelation of
-    its motion-beat train at one or two beat periods of ``bpm`` (the larger; fractional lags
-    interpolated). 1 for beats exactly that far apart, near 0 for beats unrelated to it."""
+def beat_autocorrelation(joint_positions: np.ndarray, max_lag: int) -> np.ndarray:
+    """(max_lag + 1,) normalised autocorrelation of a dance's motion-beat train (zeros without
+    beats): computed once, it can be read at any tempo with ``salience_at``."""
     train = motion_beat_train(joint_positions)
     train = train - train.mean()
-    period = 60.0 * fps / bpm
-    if bpm <= 0 or len(train) <= 4 * period or not train.any():
-        return 0.0
+    if not train.any():
+        return np.zeros(max_lag + 1)
     spectrum = np.fft.rfft(train, 2 * len(train))
-    autocorrelation = np.fft.irfft(spectrum * np.conj(spectrum))[: int(2 * period) + 2]
+    autocorrelation = np.fft.irfft(spectrum * np.conj(spectrum))[: max_lag + 1]
+    return autocorrelation / autocorrelation[0]
+
+
+def salience_at(autocorrelation: np.ndarray, fps: float, bpm: float) -> float:
+    """A ``beat_autocorrelation`` read at one or two beat periods of ``bpm`` (the larger, lags
+    interpolated); 0 where two periods lie past its last lag."""
+    period = 60.0 * fps / bpm if bpm > 0 else np.inf
+    if 2 * period > len(autocorrelation) - 1:
+        return 0.0
     lags = np.arange(len(autocorrelation))
-    return float(max(np.interp(m * period, lags, autocorrelation) for m in (1, 2)) / autocorrelation[0])
+    return float(max(np.interp(m * period, lags, autocorrelation) for m in (1, 2)))
+
+
+def tempo_salience(joint_positions: np.ndarray, fps: float, bpm: float) -> float:
+    """How strongly a dance's motion beats recur at a tempo: the normalised autocorrelation of
+    its motion-beat train at one or two beat periods of ``bpm``. 1 for beats exactly that far
+    apart, near 0 for beats unrelated to it, 0 for a dance too short to show two periods."""
+    if bpm <= 0 or len(joint_positions) <= 4 * 60.0 * fps / bpm:
+        return 0.0
+    return salience_at(beat_autocorrelation(joint_positions, int(2 * 60.0 * fps / bpm) + 1), fps, bpm)
 
 
 def same_pulse(bpm: float, other_bpm: float, tolerance: float = LOCK_TOLERANCE) -> bool:
