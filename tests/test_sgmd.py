@@ -46,6 +46,19 @@ def test_denoiser_shapes_and_style_modes():
     assert outputs == {"modulation": True, "concat": True, "none": False}  # only "none" ignores style
 
 
+def test_zero_style_init_starts_as_the_no_style_model_and_still_learns_style():
+    x, t, music, style = inputs()
+    torch.manual_seed(0)
+    plain = Denoiser(model_config("tiny", style_dim=8, style_mode="none")).eval()
+    torch.manual_seed(0)
+    zero = Denoiser(model_config("tiny", style_dim=8, style_init="zero")).eval()
+    shared = plain.state_dict()
+    assert all(torch.equal(value, zero.state_dict()[name]) for name, value in shared.items())
+    assert torch.equal(plain(x, t, music, style), zero(x, t, music, style))
+    zero(x, t, music, style).square().mean().backward()
+    assert zero.style_project.weight.grad.abs().max() > 0  # the branch is silent, not frozen
+
+
 def test_rotary_scores_depend_on_relative_position_only():
     rotary = RotaryEmbedding(8)
     q, k = torch.randn(8), torch.randn(8)
@@ -162,6 +175,10 @@ def test_training_lowers_the_loss_and_resumes_exactly(tmp_path):
     a, b = load_checkpoint(checkpoint)["state_dict"], load_checkpoint(resumed)["state_dict"]
     for key in a:
         torch.testing.assert_close(a[key], b[key])
+    # Other settings would silently make a run that is neither: refused, naming what changed.
+    with pytest.raises(ValueError, match="style_dropout 0.1 -> 0.5"):
+        train(TINY, replace(config, max_steps=90), data, data, tmp_path / "split", resume=True,
+              diffusion_config=DiffusionConfig(style_dropout=0.5))
 
 
 def test_windows_cover_the_song_and_stitch_back():

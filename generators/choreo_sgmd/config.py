@@ -8,6 +8,7 @@ from choreo.motion import FRAME_DIM
 from choreo.music import FEATURE_DIM
 
 STYLE_MODES = ("modulation", "concat", "none")  # paper's Style Modulation, its concat ablation, EDGE
+STYLE_INITS = ("random", "zero")  # the style projection's initial weights (zero: the style branch starts as the identity)
 PROMPT_KINDS = ("description", "name", "onehot")  # the paper's three kinds of style prompt
 
 
@@ -23,11 +24,14 @@ class ModelConfig:
     music_layers: int = 2  # music encoder layers
     dropout: float = 0.1
     style_mode: str = "modulation"
+    style_init: str = "random"
     window_frames: int = 150  # 5 s at 30 fps
 
     def __post_init__(self):
         if self.style_mode not in STYLE_MODES:
             raise ValueError(f"style_mode must be one of {STYLE_MODES}, got {self.style_mode!r}")
+        if self.style_init not in STYLE_INITS:
+            raise ValueError(f"style_init must be one of {STYLE_INITS}, got {self.style_init!r}")
         if self.latent_dim % self.num_heads or (self.latent_dim // self.num_heads) % 2:
             raise ValueError("latent_dim / num_heads must be an even integer (rotary embeddings)")
 
@@ -44,6 +48,11 @@ class DiffusionConfig:
     velocity_weight: float = 2.964
     joint_weight: float = 0.646
     foot_weight: float = 10.942
+
+    def __post_init__(self):
+        for name in ("music_dropout", "style_dropout"):
+            if not 0.0 <= getattr(self, name) < 1.0:
+                raise ValueError(f"{name} must be in [0, 1), got {getattr(self, name)}")
 
 
 @dataclass(frozen=True)

@@ -160,6 +160,11 @@ class Denoiser(nn.Module):
         self.layers = nn.ModuleList(DecoderLayer(config) for _ in range(config.num_layers))
         self.final_norm = nn.LayerNorm(d)
         self.style_project = None if config.style_mode == "none" else nn.Linear(config.style_dim, d)
+        if self.style_project is not None and config.style_init == "zero":
+            # Created last and zeroed after its draw, so every other weight matches the no-style model's
+            # and the network starts as that model: the style only enters where training finds it helps.
+            nn.init.zeros_(self.style_project.weight)
+            nn.init.zeros_(self.style_project.bias)
 
     def encode_music(self, music: torch.Tensor, keep_music: torch.Tensor) -> torch.Tensor:
         """(B, T, d) music tokens; rows where keep_music is False become the learned null."""

@@ -124,6 +124,19 @@ class Trainer:
             "music_scaler": self.music_scaler.state_dict(), "step": self.step, "history": self.history,
         }  # fmt: skip
 
+    def check_resumable(self, state: dict) -> None:
+        """Refuse to continue a run under other settings: the result would match neither run.
+        Only the step budget, the thread count and how often to checkpoint may change on resume."""
+        stored = {"model": asdict(ModelConfig(**state["model_config"])),
+                  "diffusion": asdict(DiffusionConfig(**state["diffusion_config"])),
+                  "train": asdict(TrainConfig(**state["train_config"]))}
+        wanted = {"model": asdict(self.model_config), "diffusion": asdict(self.diffusion_config), "train": asdict(self.config)}
+        free = {"max_steps", "num_threads", "checkpoint_every", "validation_every"}
+        changed = [f"{key} {stored[part][key]!r} -> {value!r}" for part in wanted for key, value in wanted[part].items()
+                   if key not in free and stored[part].get(key) != value]
+        if changed:
+            raise ValueError(f"cannot resume: the checkpoint was trained with other settings ({'; '.join(changed)})")
+
     def load_state(self, state: dict) -> None:
         self.model.load_state_dict(state["state_dict"])
         self.ema.load_state_dict(state["ema_state_dict"])
@@ -160,7 +173,9 @@ def train(model_config: ModelConfig, train_config: TrainConfig, train_data: Wind
     checkpoint = out_dir / "last.pt"
     trainer = Trainer(model_config, diffusion_config, train_config, train_data, validation_data, device, rank, world)
     if resume and checkpoint.exists():
-        trainer.load_state(load_checkpoint(checkpoint))
+        state = load_checkpoint(checkpoint)
+        trainer.check_resumable(state)
+        trainer.load_state(state)
     lead = rank == 0  # validates, writes checkpoints and reports progress
     started, seen, losses = time.perf_counter(), 0, []
     while trainer.step < train_config.max_steps:

@@ -19,6 +19,8 @@ def train(
     batch_size: Optional[int] = typer.Option(None, help="Windows per step (default 32)."),
     prompt: str = typer.Option("description", help="Style prompt kind: description, name or onehot."),
     style_mode: Optional[str] = typer.Option(None, help="sgmd ablations: modulation (default), concat or none (EDGE)."),
+    style_init: Optional[str] = typer.Option(None, help="sgmd: the style FC's initial weights, random (default) or zero (starts as the no-style model)."),
+    style_dropout: Optional[float] = typer.Option(None, help="sgmd: share of training windows shown without their style (default 0.1)."),
     checkpoint_every: Optional[int] = typer.Option(None, help="Steps between checkpoints and validations (default 500)."),
     seed: Optional[int] = typer.Option(None, help="Seed of initialisation, batches and noise (default 0)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
@@ -50,8 +52,8 @@ def train(
 
         try:
             path = plugin.train(data, out, config=config, resume=resume, max_steps=steps, prompt_kind=prompt,
-                                batch_size=batch_size, style_mode=style_mode, checkpoint_every=checkpoint_every,
-                                seed=seed, progress=report)
+                                batch_size=batch_size, style_mode=style_mode, style_init=style_init,
+                                style_dropout=style_dropout, checkpoint_every=checkpoint_every, seed=seed, progress=report)
         except ValueError as error:  # bad configuration names and the like
             raise ParameterError(str(error)) from None
     stderr_console.print(f"wrote {path}")
