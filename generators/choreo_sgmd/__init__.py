@@ -29,10 +29,9 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
     train_overrides = {"max_steps": max_steps, "batch_size": batch_size, "seed": seed,
                        "checkpoint_every": checkpoint_every, "validation_every": checkpoint_every}
     train_config = replace(TrainConfig(prompt_kind=prompt_kind), **{k: v for k, v in train_overrides.items() if v is not None})
-    model_overrides = {"style_dim": style_dim(prompt_kind)} | ({"style_mode": style_mode} if style_mode else {}) \
-        | ({"style_init": style_init} if style_init else {})
-    model = model_config(config, **model_overrides)
-    diffusion = DiffusionConfig() if style_dropout is None else DiffusionConfig(style_dropout=style_dropout)
+    model_overrides = {"style_mode": style_mode, "style_init": style_init}
+    model = model_config(config, style_dim=style_dim(prompt_kind), **{k: v for k, v in model_overrides.items() if v})
+    diffusion = DiffusionConfig(**({} if style_dropout is None else {"style_dropout": style_dropout}))
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]
