@@ -2,7 +2,8 @@
 
     python benchmarks/beat_lock.py [--seconds 60] [--m2d ../shared/data/m2d]   # needs `apt-get install lmms`
 
-Each song (a minute from 10 s in) is danced by both bundled generators with their defaults. How
+Each song (a minute from 10 s in) is danced by both bundled generators with their defaults, and
+each dance is also scored after choreo.finishing's beat lock (side by side, same dance). How
 strongly a dance's motion beats recur at a tempo is `choreo.metrics.tempo_salience`. A dance is
 locked to its song when its beats recur more strongly at its own song's tempo than at another
 song's: the share of (dance, other song) pairs where that holds is 50 % for dances that ignore
@@ -24,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from choreo.generator import GenerationRequest
-from choreo.metrics import beat_autocorrelation, salience_at, same_pulse
+from choreo.finishing import beat_lock
+from choreo.metrics import beat_align_score, beat_autocorrelation, motion_beats, salience_at, same_pulse
 from choreo.music import Music, audio_duration
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -57,9 +59,23 @@ def generators() -> dict:
             "ChoreoGraph": ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT)}
 
 
-def generated(backends: dict, music: Music) -> dict[str, np.ndarray]:
-    return {name: beat_profile(backend.generate(GenerationRequest(music, seed=0)).joint_positions())
-            for name, backend in backends.items()}
+LOCK_SECONDS: list[tuple[float, float]] = []  # (seconds the beat lock took, seconds of dance)
+BEAT_ALIGN: dict[str, list[float]] = {}  # each dancer's BeatAlign against the music's beats
+
+
+def generated(backends: dict, music: Music, where: str) -> dict[str, np.ndarray]:
+    """Each backend's dance (seed 0), as it comes and after the beat lock: beat profiles."""
+    profiles = {}
+    for name, backend in backends.items():
+        motion = backend.generate(GenerationRequest(music, seed=0))
+        started = time.perf_counter()
+        locked = beat_lock(motion, music.beat_frames).motion
+        LOCK_SECONDS.append((time.perf_counter() - started, motion.duration))
+        for label, dance in ((name, motion), (f"{name} + beat lock", locked)):
+            positions = dance.joint_positions()
+            profiles[label] = beat_profile(positions)
+            BEAT_ALIGN.setdefault(f"{label} ({where})", []).append(beat_align_score(music.beat_frames, motion_beats(positions)))
+    return profiles
 
 
 def dance_outside_songs(seconds: float) -> list[Danced]:
@@ -67,7 +83,7 @@ def dance_outside_songs(seconds: float) -> list[Danced]:
     for song in outside_songs():
         skip = SKIP_SECONDS if audio_duration(song.path) >= SKIP_SECONDS + 20 else 0.0
         music = Music.from_file(song.path, start=skip, end=skip + seconds)
-        danced.append(Danced(song.name, song.bpm, music.tempo, generated(backends, music)))
+        danced.append(Danced(song.name, song.bpm, music.tempo, generated(backends, music, "outside songs")))
         print(f"danced {song.name} ({song.bpm:g} bpm, heard {music.tempo:.1f})", flush=True)
     return danced
 
@@ -81,7 +97,10 @@ def m2d_dancers(clips) -> list[Danced]:
         music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
         dances = {"real dancers": beat_profile(clip.motion.joint_positions())}
         if clip.split == TEST:
-            dances |= generated(backends, music)
+            BEAT_ALIGN.setdefault("real dancers (M2D test songs)", []).append(
+                beat_align_score(music.beat_frames, motion_beats(clip.motion.joint_positions())))
+        if clip.split == TEST:
+            dances |= generated(backends, music, "M2D test songs")
         danced.append(Danced(clip.name, music.tempo, music.tempo, dances))
     return danced
 
@@ -118,6 +137,12 @@ def markdown(outside: list[Danced], m2d: list[Danced]) -> list[str]:
         test = [d for d in m2d if len(d.dances) > 1]
         lines += [lock_row("all M2D clips, tempo heard by choreo", m2d, "real dancers"),
                   *(lock_row("M2D test songs, tempo heard by choreo", test, n) for n in ["real dancers", *names])]
+    lines += ["", "| dancer | BeatAlign (mean over dances) |", "| --- | ---: |",
+              *(f"| {name} | {np.mean(values):.3f} |" for name, values in BEAT_ALIGN.items())]
+    if LOCK_SECONDS:
+        spent, danced_seconds = np.sum(LOCK_SECONDS, axis=0)
+        lines += ["", f"The beat lock took {spent:.1f} s for {danced_seconds / 60:.1f} min of dance "
+                      f"({60 * spent / danced_seconds:.2f} s per minute)."]
     lines += ["", f"choreo's music analysis hears the stated tempo (or half or double it, within 4 %) in "
               f"{100 * heard:.0f} % of the outside songs."]
     return lines

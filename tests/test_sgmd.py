@@ -24,7 +24,7 @@ TINY = model_config("tiny", style_dim=8)
 def inputs(batch=2, frames=150, seed=0):
     g = torch.Generator().manual_seed(seed)
     return (torch.randn(batch, frames, 151, generator=g), torch.randint(0, 1000, (batch,), generator=g),
-            torch.randn(batch, frames, 35, generator=g), torch.randn(batch, 8, generator=g))
+            torch.randn(batch, frames, TINY.music_dim, generator=g), torch.randn(batch, 8, generator=g))
 
 
 def test_paper_configuration_size():
@@ -328,7 +328,7 @@ def test_long_songs_go_block_by_block_without_a_seam(tiny_generator):
     assert block_ranges(5, 8) == [(0, 5)]
     assert block_ranges(10, 4) == [(0, 4), (3, 7), (6, 10)]
     g = tiny_generator
-    music = torch.randn(30 * 20, 35)
+    music = torch.randn(30 * 20, g.model_config.music_dim)
     style, keep = torch.zeros(1, g.model_config.style_dim), False
     one, _ = sample_long(g.model, g.schedule, music, style, keep, g.model_config.frame_dim, g.model_config.window_frames,
                          SamplingOptions(steps=3, block_windows=64))

@@ -14,30 +14,37 @@ from choreo.generator import GeneratorPlugin
 def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = "cpu", resume: bool = False,
                        max_steps: int | None = None, prompt_kind: str = "description", batch_size: int | None = None,
                        style_mode: str | None = None, style_init: str | None = None, style_dropout: float | None = None,
-                       checkpoint_every: int | None = None, seed: int | None = None, progress=None,
-                       load_progress=None) -> Path:
+                       checkpoint_every: int | None = None, seed: int | None = None, mirror: bool | None = None,
+                       stretch: tuple[float, ...] | None = None, genre_balance: float | None = None,
+                       rhythm: bool | None = None, progress=None, load_progress=None) -> Path:
     """Train on a dataset folder (M2D, AIST++ or BVH+audio): its train split, validated on its test split."""
     from dataclasses import replace
 
     from choreo.datasets import TEST, TRAIN, WindowConfig, load_dataset
 
     from .config import DiffusionConfig, TrainConfig, model_config
-    from .data import windows_to_tensors
+    from choreo.music import FEATURE_DIM
+
+    from .data import Augmentation, windows_to_tensors
     from .style import style_dim
     from .training import train
 
     train_overrides = {"max_steps": max_steps, "batch_size": batch_size, "seed": seed,
-                       "checkpoint_every": checkpoint_every, "validation_every": checkpoint_every}
+                       "checkpoint_every": checkpoint_every, "validation_every": checkpoint_every,
+                       "mirror": mirror, "stretch": stretch, "genre_balance": genre_balance}
     train_config = replace(TrainConfig(prompt_kind=prompt_kind), **{k: v for k, v in train_overrides.items() if v is not None})
-    model_overrides = {"style_mode": style_mode, "style_init": style_init}
+    model_overrides = {"style_mode": style_mode, "style_init": style_init,
+                       "music_dim": FEATURE_DIM if rhythm is False else None}
     model = model_config(config, style_dim=style_dim(prompt_kind), **{k: v for k, v in model_overrides.items() if v})
     diffusion = DiffusionConfig(**({} if style_dropout is None else {"style_dropout": style_dropout}))
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]
     windows = WindowConfig(seconds=model.window_frames / 30, stride_seconds=train_config.window_stride_seconds)
-    train_data = windows_to_tensors(train_clips, windows, prompt_kind)
-    validation = windows_to_tensors(test_clips, WindowConfig(seconds=5, stride_seconds=2.5), prompt_kind) if test_clips else None
+    augmentation = Augmentation(mirror=train_config.mirror, stretch=train_config.stretch)
+    train_data = windows_to_tensors(train_clips, windows, prompt_kind, model.music_dim, augmentation)
+    validation = (windows_to_tensors(test_clips, WindowConfig(seconds=5, stride_seconds=2.5), prompt_kind, model.music_dim)
+                  if test_clips else None)
     return train(model, train_config, train_data, validation, out_dir, resume=resume, diffusion_config=diffusion,
                  progress=progress)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 
 from choreo.motion import FRAME_DIM
-from choreo.music import FEATURE_DIM
+from choreo.music import FEATURE_DIM, RHYTHM_DIM
 
 STYLE_MODES = ("modulation", "concat", "none")  # paper's Style Modulation, its concat ablation, EDGE
 STYLE_INITS = ("random", "zero")  # the style projection's initial weights (zero: the style branch starts as the identity)
@@ -15,7 +15,7 @@ PROMPT_KINDS = ("description", "name", "onehot")  # the paper's three kinds of s
 @dataclass(frozen=True)
 class ModelConfig:
     frame_dim: int = FRAME_DIM  # 4 contacts | 3 root | 24 x 6D
-    music_dim: int = FEATURE_DIM  # the 35-d librosa features
+    music_dim: int = FEATURE_DIM + RHYTHM_DIM  # 35-d librosa features + beat phase and tempo (35: without)
     style_dim: int = 384  # all-MiniLM-L6-v2 sentence embeddings; the number of genres for one-hot
     latent_dim: int = 512
     ff_dim: int = 1024
@@ -68,10 +68,16 @@ class TrainConfig:
     seed: int = 0
     prompt_kind: str = "description"
     num_threads: int = 0  # 0: torch's default
+    mirror: bool = True  # also train on every clip's mirror image
+    stretch: tuple[float, ...] = (0.85, 1.0, 1.18)  # and on it danced at these paces, music along
+    genre_balance: float = 0.5  # draw windows with weight (windows of their genre)^-genre_balance
 
     def __post_init__(self):
         if self.prompt_kind not in PROMPT_KINDS:
             raise ValueError(f"prompt_kind must be one of {PROMPT_KINDS}, got {self.prompt_kind!r}")
+        object.__setattr__(self, "stretch", tuple(float(f) for f in self.stretch))  # lists come back from checkpoints
+        if not 0.0 <= self.genre_balance <= 1.0:
+            raise ValueError(f"genre_balance must be in [0, 1], got {self.genre_balance}")
 
 
 PRESETS: dict[str, ModelConfig] = {

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 import torch
 
-from choreo.datasets import Clip, WindowConfig, WindowedDataset
-from choreo.motion import motion_to_vector
+from choreo.datasets import Clip, WindowConfig, window_starts
+from choreo.errors import ParameterError
+from choreo.motion import Motion, mirrored, motion_to_vector, stretched
+from choreo.music import FEATURE_DIM, RHYTHM_DIM, rhythm_channels, stretch_features
 
 from .style import GENRES, canonical_genre, genre_vector
 
@@ -20,32 +23,76 @@ class WindowTensors:
     music: torch.Tensor  # (N, T, 35) raw features
     style: torch.Tensor  # (N, S) style vectors (zeros where the genre is unknown)
     has_style: torch.Tensor  # (N,) bool
+    genres: tuple[str | None, ...] = ()  # (N,) each window's genre, for genre-balanced sampling
 
     def __len__(self) -> int:
         return len(self.motion)
 
+    def sampling_weights(self, balance: float) -> torch.Tensor | None:
+        """Per-window draw weights proportional to (windows of its genre)^-balance; None for 0.
 
-def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind: str) -> WindowTensors:
-    """Every window of ``clips`` as stacked tensors; motion vectors are computed once per clip."""
-    motions, musics, styles, has_style = [], [], [], []
+        balance 1 draws every genre equally often; 0.5 halves the gap in log share. M2D's waltz
+        (60 % of the windows, captured at 5.9 fps and interpolated) is the case it is for.
+        """
+        if not balance or len(self.genres) != len(self):
+            return None  # uniform draws (windows made without genres, e.g. synthetic ones)
+        counts = Counter(self.genres)
+        return torch.tensor([counts[g] ** -balance for g in self.genres], dtype=torch.float64)
+
+
+@dataclass(frozen=True)
+class Augmentation:
+    """Copies of each training clip a real dancer could have danced: mirrored, faster, slower."""
+
+    mirror: bool = False
+    stretch: tuple[float, ...] = (1.0,)  # pace factors; music features are stretched along
+
+    def __post_init__(self):
+        if not self.stretch or any(not 0.5 <= f <= 2.0 for f in self.stretch):
+            raise ParameterError(f"stretch factors must be within [0.5, 2], got {self.stretch}")
+
+    def variants(self, motion: Motion, features: np.ndarray) -> Iterator[tuple[Motion, np.ndarray]]:
+        for factor in self.stretch:
+            paced = (motion, features) if factor == 1.0 else (stretched(motion, factor), stretch_features(features, factor))
+            yield paced
+            if self.mirror:
+                yield mirrored(paced[0]), paced[1]
+
+
+def music_input(features: np.ndarray, music_dim: int) -> np.ndarray:
+    """What a model with ``music_dim`` inputs reads: the 35-d features, plus the rhythm channels
+    (beat phase, tempo) for models trained with them (music_dim 38)."""
+    if music_dim == FEATURE_DIM:
+        return features
+    if music_dim == FEATURE_DIM + RHYTHM_DIM:
+        return np.concatenate([features, rhythm_channels(features)], axis=1)
+    raise ParameterError(f"a model reading {music_dim}-d music is not one choreo knows how to feed")
+
+
+def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind: str,
+                       music_dim: int = FEATURE_DIM, augmentation: Augmentation = Augmentation()) -> WindowTensors:
+    """Every window of ``clips`` (and of their augmented copies) as stacked tensors; motion
+    vectors are computed once per clip and copy; rhythm channels per window, as scoring sees them."""
+    motions, musics, styles, has_style, genres = [], [], [], [], []
     dim = len(GENRES) if prompt_kind == "onehot" else 384
     for clip in clips:
         if clip.features is None:
             continue
-        vectors = motion_to_vector(clip.motion)
         genre = canonical_genre(clip.genre) if clip.genre else None
         vector = genre_vector(genre, prompt_kind) if genre else np.zeros(dim, np.float32)
-        single = WindowedDataset([clip], config)
-        for _, start in single.index:
-            stop = start + config.length
-            motions.append(vectors[start:stop])
-            musics.append(clip.features[start:stop])
-            styles.append(vector)
-            has_style.append(genre is not None)
+        for motion, features in augmentation.variants(clip.motion, clip.features):
+            vectors = motion_to_vector(motion)
+            for start in window_starts(len(vectors), config):
+                stop = start + config.length
+                motions.append(vectors[start:stop])
+                musics.append(music_input(features[start:stop], music_dim))
+                styles.append(vector)
+                has_style.append(genre is not None)
+                genres.append(genre)
     if not motions:
         raise ValueError("no training windows: clips are shorter than a window or have no music")
     return WindowTensors(torch.from_numpy(np.stack(motions)).float(), torch.from_numpy(np.stack(musics)).float(),
-                         torch.from_numpy(np.stack(styles)).float(), torch.tensor(has_style))
+                         torch.from_numpy(np.stack(styles)).float(), torch.tensor(has_style), tuple(genres))
 
 
 @dataclass

@@ -29,7 +29,7 @@ def genre_styles(generator: SGMDGenerator, genres: Sequence[str | None]) -> tupl
 def generate_window_motions(generator: SGMDGenerator, windows: Sequence, options: SamplingOptions,
                             with_style: bool = True, constraints: Sequence[Constraints] | None = None) -> list[Motion]:
     """A generated motion for every scoring window (under that window's constraints, if given)."""
-    music = generator.music_scaler(torch.from_numpy(np.stack([w.features for w in windows])).float())
+    music = generator.music_tensor(np.stack([w.features for w in windows]))
     styles, keep = genre_styles(generator, [w.genre if with_style else None for w in windows])
     inpainting, values, mask = None, None, None
     if constraints is not None:

@@ -6,6 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
 import torch
 
 from choreo.constraints import Constraints, parse_style_schedule
@@ -15,7 +16,7 @@ from choreo.motion import Motion, vector_to_motion
 
 from .checkpoint import load_checkpoint
 from .config import DiffusionConfig, ModelConfig
-from .data import MusicScaler
+from .data import MusicScaler, music_input
 from .model import Denoiser
 from .normalizer import Normalizer
 from .sampling import Inpainting, SamplingOptions, sample_long
@@ -41,6 +42,14 @@ class SGMDGenerator(Generator):
         self.schedule = NoiseSchedule(self.diffusion_config)
         self.trained_steps = int(state["step"])
 
+    def music_tensor(self, features: np.ndarray) -> torch.Tensor:
+        """(..., T, music_dim) standardised model input from (..., T, 35) features (per window
+        when stacked: rhythm channels are derived from each excerpt's own beats)."""
+        features = np.asarray(features)
+        if features.ndim == 3:
+            return torch.stack([self.music_tensor(window) for window in features])
+        return self.music_scaler(torch.from_numpy(music_input(features, self.model_config.music_dim)).float())
+
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
         options = SamplingOptions(**{k: v for k, v in request.options.items() if k in SamplingOptions.__dataclass_fields__})
         if request.seed is not None:
@@ -55,7 +64,7 @@ class SGMDGenerator(Generator):
         num_frames = request.music.num_frames
         style, keep_style, genres, notices = self.style_conditioning(request.style, num_frames, request.music.fps)
         inpainting, known = self.inpainting(request.constraints, num_frames)
-        music = self.music_scaler(torch.from_numpy(request.music.features).float())
+        music = self.music_tensor(request.music.features)
         x0, evaluations = sample_long(self.model, self.schedule, music, style, keep_style, self.model_config.frame_dim,
                                       self.model_config.window_frames, options, progress, inpainting)
         vectors = self.normalizer.denormalize(x0).numpy()

@@ -33,6 +33,7 @@ from .schedule import NoiseSchedule
 from .style import GENRES
 
 VALIDATION_WINDOWS = 64
+BEFORE_AUGMENTATION = {"mirror": False, "stretch": (1.0,), "genre_balance": 0.0}  # what older checkpoints trained with
 
 
 def _step_generator(seed: int, step: int) -> torch.Generator:
@@ -57,6 +58,7 @@ class Trainer:
         self.normalizer = Normalizer.fit(train.motion.reshape(-1, train.motion.shape[-1])).to(self.device)
         self.music_scaler = MusicScaler.fit(train.music).to(self.device)
         self.train, self.validation = train, validation
+        self.weights = train.sampling_weights(train_config.genre_balance)
         self.step = 0
         self.history: list[list[float]] = []  # [step, train loss, validation loss or -1]
 
@@ -81,7 +83,10 @@ class Trainer:
 
     def train_step(self) -> float:
         generator = _step_generator(self.config.seed, self.step)
-        indices = torch.randint(0, len(self.train), (self.config.batch_size,), generator=generator)
+        if self.weights is None:
+            indices = torch.randint(0, len(self.train), (self.config.batch_size,), generator=generator)
+        else:
+            indices = torch.multinomial(self.weights, self.config.batch_size, replacement=True, generator=generator)
         self.model.train()
         loss = self.loss(self.network, *self.batch(generator, self.train, indices, slice(self.rank, None, self.world)))
         self.optimizer.zero_grad(set_to_none=True)
@@ -129,7 +134,7 @@ class Trainer:
         Only the step budget, the thread count and how often to checkpoint may change on resume."""
         stored = {"model": asdict(ModelConfig(**state["model_config"])),
                   "diffusion": asdict(DiffusionConfig(**state["diffusion_config"])),
-                  "train": asdict(TrainConfig(**state["train_config"]))}
+                  "train": asdict(TrainConfig(**{**BEFORE_AUGMENTATION, **state["train_config"]}))}
         wanted = {"model": asdict(self.model_config), "diffusion": asdict(self.diffusion_config), "train": asdict(self.config)}
         free = {"max_steps", "num_threads", "checkpoint_every", "validation_every"}
         changed = [f"{key} {stored[part][key]!r} -> {value!r}" for part in wanted for key, value in wanted[part].items()
@@ -172,6 +177,9 @@ def train(model_config: ModelConfig, train_config: TrainConfig, train_data: Wind
     out_dir.mkdir(parents=True, exist_ok=True)
     checkpoint = out_dir / "last.pt"
     trainer = Trainer(model_config, diffusion_config, train_config, train_data, validation_data, device, rank, world)
+    if rank == 0:
+        for partial in out_dir.glob(f".{checkpoint.stem}.*.tmp{checkpoint.suffix}"):
+            partial.unlink()  # left by a run killed while writing a checkpoint (last.pt itself is whole)
     if resume and checkpoint.exists():
         state = load_checkpoint(checkpoint)
         trainer.check_resumable(state)

@@ -26,6 +26,8 @@ GUIDANCE = typer.Option(2.0, help="Classifier-free guidance weight on the music 
 SAMPLER = typer.Option("ddim", help="ddim (fast, any number of steps) or ddpm (the full chain).")
 SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
+BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
+                         help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
 
 
 def generate(
@@ -41,6 +43,7 @@ def generate(
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
+    beat_lock: bool = BEAT_LOCK,
 ) -> None:
     """Generate a dance for a song, or for many songs in one run.
 
@@ -79,7 +82,8 @@ def generate(
         opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
+                        beat_lock)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
@@ -104,7 +108,7 @@ def inbetween(
     key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
 
@@ -132,7 +136,7 @@ def inbetween(
             fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
         return fixed
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -143,7 +147,7 @@ def inpaint(
     joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
 
@@ -166,7 +170,7 @@ def inpaint(
             raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
         return fixed
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -175,7 +179,7 @@ def trajectory(
     path: Path = typer.Option(..., help="Root path on the floor: CSV (x,z or t,x,z; optional y) or a motion file."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
 
@@ -189,7 +193,7 @@ def trajectory(
         xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
         return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -206,6 +210,7 @@ class Settings:
     seed: int
     format: str | None
     preview: bool = False  # render an MP4 with the music beside the first output file
+    beat_lock: bool = True  # the finishing pass: motion beats re-timed onto the music's beats
 
 
 def load_backend(settings: Settings, **factory_options):
@@ -245,6 +250,10 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
         motion = backend.generate(request, progress=lambda fraction: update(round(fraction * 100), 100))
+    if settings.beat_lock:
+        from ..finishing import beat_lock
+
+        motion = beat_lock(motion, music.beat_frames, None if constraints is None else constraints.fixed_frames()).motion
     seconds = time.perf_counter() - started
     meta = motion.metadata
     if meta.get("style_notice"):

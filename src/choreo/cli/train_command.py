@@ -23,6 +23,10 @@ def train(
     style_dropout: Optional[float] = typer.Option(None, help="sgmd: share of training windows shown without their style (default 0.1)."),
     checkpoint_every: Optional[int] = typer.Option(None, help="Steps between checkpoints and validations (default 500)."),
     seed: Optional[int] = typer.Option(None, help="Seed of initialisation, batches and noise (default 0)."),
+    mirror: Optional[bool] = typer.Option(None, "--mirror/--no-mirror", help="sgmd: also train on mirrored dances (default on)."),
+    stretch: Optional[str] = typer.Option(None, help="sgmd: paces to also train at, music stretched along (default 0.85,1,1.18; 1 = off)."),
+    genre_balance: Optional[float] = typer.Option(None, help="sgmd: 0 draws windows uniformly, 1 draws every genre equally (default 0.5)."),
+    rhythm: Optional[bool] = typer.Option(None, "--rhythm/--no-rhythm", help="sgmd: feed beat phase and tempo to the model (default on)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
@@ -31,6 +35,7 @@ def train(
       choreo train sgmd --data ../shared/data/m2d --out runs/sgmd --steps 8000
       choreo train sgmd --data ~/aistpp --config paper --out runs/paper --resume
       choreo train sgmd --data ../shared/data/m2d --out runs/edge --style-mode none --steps 2000
+      choreo train sgmd --data ../shared/data/m2d --out runs/plain --no-mirror --stretch 1 --genre-balance 0 --no-rhythm
       choreo train graph --data ../shared/data/m2d --out runs/graph --steps 1200
     """
     from ..errors import ChoreoError, ParameterError
@@ -44,6 +49,14 @@ def train(
         raise ChoreoError(f"generator {generator!r} cannot be trained yet: {plugin.status}")
     if not data.is_dir():
         raise ParameterError(f"--data {data} is not a folder")
+    paces = None
+    if stretch is not None:
+        try:
+            paces = tuple(float(part) for part in stretch.split(","))
+        except ValueError:
+            raise ParameterError(f"--stretch wants comma-separated numbers such as 0.85,1,1.18, got {stretch!r}") from None
+    sgmd_extras = {k: v for k, v in {"mirror": mirror, "stretch": paces, "genre_balance": genre_balance,
+                                     "rhythm": rhythm}.items() if v is not None}
     with progress_bar(f"training {generator}") as update:
         def report(p):
             extra = f"loss {p.loss:.4f}" + (f", validation {p.validation_loss:.4f}" if p.validation_loss is not None else "")
@@ -53,7 +66,8 @@ def train(
         try:
             path = plugin.train(data, out, config=config, resume=resume, max_steps=steps, prompt_kind=prompt,
                                 batch_size=batch_size, style_mode=style_mode, style_init=style_init,
-                                style_dropout=style_dropout, checkpoint_every=checkpoint_every, seed=seed, progress=report)
+                                style_dropout=style_dropout, checkpoint_every=checkpoint_every, seed=seed, progress=report,
+                                **sgmd_extras)
         except ValueError as error:  # bad configuration names and the like
             raise ParameterError(str(error)) from None
     stderr_console.print(f"wrote {path}")

@@ -40,6 +40,10 @@ class Constraints:
         return cls(num_frames, float(fps), np.zeros((num_frames, 3)), np.zeros((num_frames, 3), bool), rotations,
                    np.zeros((num_frames, SMPL24.num_joints), bool))
 
+    def fixed_frames(self) -> np.ndarray:
+        """(T,) bool: frames with any given value; re-timing must leave them where they are."""
+        return self.joints_known.any(axis=1) | self.root_known.any(axis=1)
+
     # -- adding constraints ---------------------------------------------------------------------
     def fix_motion(self, motion: Motion, at: int = 0, joints: Iterable[int] = ALL_JOINTS, root: bool = True,
                    frames: np.ndarray | None = None) -> "Constraints":

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..fileio import atomic_output
 
-FEATURE_VERSION = 1  # bump when choreo.music's feature definition changes
+FEATURE_VERSION = 2  # 2: beats tracked on a 96 fps envelope; bump when choreo.music's feature definition changes
 
 
 def cache_dir() -> Path:

@@ -5,9 +5,10 @@ one-hot (1) | beat one-hot (1). Audio is resampled to 15360 Hz = 30 x 512 so tha
 samples is one motion frame at 30 fps; frame t describes the music at time t / 30 s and a song of
 d seconds has exactly floor(d * 30) frames.
 
-Per-frame features (onset strength, MFCC, chroma) are computed on blocks of audio with enough
-context on both sides that the result equals a whole-song computation; peaks and beats are then
-found on the full-length onset envelope, which is small (one float per frame). Two deliberate
+Per-frame features (onset strength, MFCC, chroma) and the 96 fps onset envelopes the beat tracker
+reads (choreo.music.beats) are computed on blocks of audio with enough context on both sides that
+the result equals a whole-song computation; peaks and beats are then found on the full-length
+envelopes, which are small (one float per frame). Two deliberate
 differences from calling librosa on a whole file, both so a frame's value cannot depend on how
 much of the song was in view: decibels use a fixed floor (amin 1e-10, no top_db clipping relative
 to the loudest frame) and chroma uses tuning 0 instead of a per-file tuning estimate.
@@ -24,7 +25,7 @@ import numpy as np
 
 from ..errors import AudioError
 from .audio import MIN_DURATION, SILENCE_RMS
-from .beats import estimate_beats, onset_peaks
+from .beats import BEAT_HOP, beat_frames_at, estimate_beats, onset_envelopes, onset_peaks
 
 FPS = 30
 HOP_LENGTH = 512
@@ -80,6 +81,8 @@ class _BlockFeaturizer:
         self.buffer = np.zeros(0, np.float32)
         self.buffer_start = 0  # global sample index of buffer[0]
         self.next_frame = 0  # first frame not yet emitted
+        self.next_beat_frame = 0  # first 96 fps envelope frame not yet emitted
+        self.envelopes: list[np.ndarray] = []
         self.total_samples = 0
         self.sum_squares = 0.0
 
@@ -95,9 +98,23 @@ class _BlockFeaturizer:
 
     def finish(self) -> list[np.ndarray]:
         last_frame = self.total_samples // self.hop
-        return [self._emit(last_frame)] if last_frame > self.next_frame else []
+        return [self._emit(last_frame, final=True)] if last_frame > self.next_frame else []
 
-    def _emit(self, stop_frame: int) -> np.ndarray:
+    def beat_envelopes(self) -> np.ndarray:
+        """(2, H) the 96 fps onset envelopes of everything emitted so far."""
+        return np.concatenate(self.envelopes, axis=1) if self.envelopes else np.zeros((2, 0), np.float32)
+
+    def _emit_envelopes(self, window: np.ndarray, first_sample: int, stop_sample: int) -> None:
+        """Envelope frames whose centres fall before ``stop_sample``, from a window that starts at
+        ``first_sample`` (moved up to a multiple of BEAT_HOP, so frames sit where a whole-song
+        analysis puts them; the few samples skipped are context, not frames)."""
+        aligned = -(-first_sample // BEAT_HOP) * BEAT_HOP
+        envelopes = onset_envelopes(window[aligned - first_sample:], self.sr)
+        stop = min(-(-stop_sample // BEAT_HOP), aligned // BEAT_HOP + envelopes.shape[1])
+        self.envelopes.append(envelopes[:, self.next_beat_frame - aligned // BEAT_HOP: stop - aligned // BEAT_HOP])
+        self.next_beat_frame = stop
+
+    def _emit(self, stop_frame: int, final: bool = False) -> np.ndarray:
         """Features of frames [next_frame, stop_frame), computed with context on both sides."""
         context = self.config.context_frames * self.hop
         first_sample = max(0, self.next_frame * self.hop - context)
@@ -106,6 +123,7 @@ class _BlockFeaturizer:
         # Left of the song there is nothing: librosa's zero padding there matches the whole-song case.
         # In the middle, frames are centred on samples inside the window, so context makes them exact.
         features = frame_features(window, self.sr, self.hop)
+        self._emit_envelopes(window, first_sample, self.total_samples if final else stop_frame * self.hop)
         offset = (self.next_frame * self.hop - first_sample) // self.hop
         block = features[offset: offset + stop_frame - self.next_frame]
         self.next_frame = stop_frame
@@ -120,7 +138,7 @@ def stream_features(blocks: Iterable[np.ndarray], name: str, sr: int = SAMPLE_RA
                     progress: Callable[[float], None] | None = None) -> tuple[np.ndarray, float, np.ndarray]:
     """Featurise a stream of mono blocks at ``sr``.
 
-    Returns (features (T, 35) float32, tempo in bpm, beat frames), T = samples // hop_length.
+    Returns (features (T, 35) float32, tempo in bpm, beat times in seconds), T = samples // hop_length.
     """
     featurizer = _BlockFeaturizer(config, hop_length, sr)
     parts: list[np.ndarray] = []
@@ -137,15 +155,21 @@ def stream_features(blocks: Iterable[np.ndarray], name: str, sr: int = SAMPLE_RA
     per_frame = np.concatenate(parts)
     if not np.isfinite(per_frame).all():
         raise AudioError(f"{name} produced invalid features (damaged audio?)")
-    return assemble_features(per_frame, sr / hop_length)
+    return assemble_features(per_frame, sr / hop_length, featurizer.beat_envelopes(), sr / BEAT_HOP)
 
 
-def assemble_features(per_frame: np.ndarray, fps: float) -> tuple[np.ndarray, float, np.ndarray]:
-    """Add the onset-peak and beat one-hot columns to (T, 33) per-frame features."""
+def assemble_features(per_frame: np.ndarray, fps: float, envelopes: np.ndarray,
+                      envelope_fps: float) -> tuple[np.ndarray, float, np.ndarray]:
+    """Add the onset-peak and beat one-hot columns to (T, 33) per-frame features.
+
+    Returns (features, tempo in bpm, beat times in seconds, those that fall on one of the T frames).
+    """
     onset = per_frame[:, ONSET_COLUMN]
-    tempo, beat_frames = estimate_beats(onset, fps)
+    tempo, beat_times = estimate_beats(envelopes, envelope_fps)
+    beat_frames = beat_frames_at(beat_times, fps, len(per_frame))
+    beat_times = beat_times[(np.round(beat_times * fps) >= 0) & (np.round(beat_times * fps) < len(per_frame))]
     peak_frames = onset_peaks(onset, fps)
     one_hots = np.zeros((len(per_frame), 2), np.float32)
     one_hots[peak_frames, 0] = 1.0
     one_hots[beat_frames, 1] = 1.0
-    return np.concatenate([per_frame, one_hots], axis=1), tempo, beat_frames
+    return np.concatenate([per_frame, one_hots], axis=1), tempo, beat_times

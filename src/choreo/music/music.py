@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from .audio import check_usable, iter_audio_blocks
+from .beats import BEAT_HOP, onset_envelopes
 from .features import BEAT_COLUMN, FEATURE_DIM, FPS, HOP_LENGTH, SAMPLE_RATE, assemble_features, frame_features, stream_features
 
 
@@ -23,7 +24,8 @@ class Music:
         duration: seconds of audio covered.
         fps: feature frames per second (30).
         features: (T, 35) float32, T = floor(duration * fps); see choreo.music.features for columns.
-        beat_times: (B,) seconds from the start of the excerpt.
+        beat_times: (B,) seconds from the start of the excerpt (at the tracker's 96 fps precision;
+            the features' beat column marks the nearest 30 fps frames).
         tempo: estimated global tempo in beats per minute (0 when no beat was found).
         start: seconds into ``path`` at which frame 0 is (an excerpt's start).
     """
@@ -42,7 +44,7 @@ class Music:
 
     @property
     def beat_frames(self) -> np.ndarray:
-        """Frame indices of the beats (the frames whose beat one-hot is set)."""
+        """Frame indices of the beats (the frames whose beat one-hot is set, the beat times rounded)."""
         return np.flatnonzero(self.features[:, BEAT_COLUMN] > 0.5)
 
     def slice_frames(self, start: int, stop: int) -> np.ndarray:
@@ -74,9 +76,9 @@ class Music:
             total = (end if end is not None else audio_duration(path)) - (start or 0.0)
             report = lambda done: progress(min(done, total), total)  # noqa: E731
         blocks = iter_audio_blocks(path, SAMPLE_RATE, start, end)
-        features, tempo, beat_frames = stream_features(blocks, str(path), progress=report)
+        features, tempo, beat_times = stream_features(blocks, str(path), progress=report)
         return cls(path=path, duration=_duration(features), fps=float(FPS),
-                   features=features, beat_times=beat_frames / FPS, tempo=tempo, start=start or 0.0)
+                   features=features, beat_times=beat_times, tempo=tempo, start=start or 0.0)
 
     @classmethod
     def from_array(cls, samples: np.ndarray, sr: int) -> "Music":
@@ -91,9 +93,10 @@ class Music:
         check_usable(samples, SAMPLE_RATE, "audio array")
         num_frames = len(samples) // HOP_LENGTH
         per_frame = frame_features(samples)[:num_frames]
-        features, tempo, beat_frames = assemble_features(per_frame, FPS)
+        envelopes = onset_envelopes(samples, SAMPLE_RATE)[:, : len(samples) // BEAT_HOP]
+        features, tempo, beat_times = assemble_features(per_frame, FPS, envelopes, SAMPLE_RATE / BEAT_HOP)
         return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
-                   beat_times=beat_frames / FPS, tempo=tempo)
+                   beat_times=beat_times, tempo=tempo)
 
 
 def _duration(features: np.ndarray) -> float:

@@ -1,0 +1,92 @@
+"""Beat lock: motion beats re-timed onto music beats, within speed bounds, given frames untouched."""
+
+import numpy as np
+import pytest
+
+from choreo.errors import ParameterError
+from choreo.finishing import BeatLockConfig, beat_lock, lock_warp
+from choreo.finishing.beat_lock import free_spans
+from choreo.metrics import beat_align_score, motion_beats
+from choreo.motion import Motion
+from choreo.skeleton import rotations as rot
+
+
+def swinging_dance(beat_frames: np.ndarray, num_frames: int) -> Motion:
+    """Arms swing through a pose and stop at each of ``beat_frames``: speed minima (motion beats) there."""
+    phase = np.interp(np.arange(num_frames), np.concatenate([[0], beat_frames, [num_frames - 1]]),
+                      np.arange(len(beat_frames) + 2, dtype=float))
+    angle = 0.8 * np.cos(np.pi * phase)  # one swing per beat interval, at rest (zero speed) on each beat
+    axis_angle = np.zeros((num_frames, 24, 3))
+    for joint in (16, 17, 18, 19):  # shoulders and elbows
+        axis_angle[:, joint, 2] = angle
+    return Motion(np.tile([0.0, 0.9, 0.0], (num_frames, 1)), rot.axis_angle_to_quaternion(axis_angle))
+
+
+def test_warp_puts_each_dance_beat_on_its_music_beat():
+    dance_beats = np.array([12, 27, 44, 58, 75, 90])
+    music_beats = np.arange(15, 100, 15)
+    source, pairs = lock_warp(dance_beats, music_beats, 110, np.zeros(110, bool), 30.0,
+                              BeatLockConfig(smoothing_frames=0))
+    assert pairs == [(12, 15), (27, 30), (44, 45), (58, 60), (75, 75), (90, 90)]
+    for dance, music in pairs:
+        assert source[music] == pytest.approx(dance)  # output frame `music` plays the dance's beat
+    speed = np.diff(source)
+    assert speed.min() >= 0.75 - 1e-9 and speed.max() <= 1.33 + 1e-9
+    assert source[0] == 0 and source[-1] == 109
+
+
+def test_smoothing_keeps_speeds_in_bounds_and_beats_within_a_frame():
+    dance_beats = np.array([12, 27, 44, 58, 75, 90])
+    source, pairs = lock_warp(dance_beats, np.arange(15, 100, 15), 110, np.zeros(110, bool), 30.0)
+    speed = np.diff(source)
+    assert speed.min() >= 0.75 - 1e-6 and speed.max() <= 1.33 + 1e-6
+    assert all(abs(source[m] - d) < 1.0 for d, m in pairs)
+    assert (np.abs(np.diff(speed)) < 0.1).all()  # no kink where a pair is
+
+
+def test_beats_out_of_reach_are_left_alone():
+    # the only music beat is 20 frames (0.67 s) from the dance's beat: further than max_shift
+    source, pairs = lock_warp(np.array([40]), np.array([60]), 100, np.zeros(100, bool), 30.0)
+    assert pairs == [] and np.array_equal(source, np.arange(100))
+    # within reach, but reaching it would need more than the speed bounds allow
+    source, pairs = lock_warp(np.array([10]), np.array([3]), 100, np.zeros(100, bool), 30.0)
+    assert pairs == []
+
+
+def test_fixed_frames_are_anchors():
+    fixed = np.zeros(120, bool)
+    fixed[50:60] = True
+    assert free_spans(fixed) == [(0, 50), (59, 119)]
+    source, pairs = lock_warp(np.array([20, 80, 100]), np.array([25, 85, 95]), 120, fixed, 30.0)
+    assert np.array_equal(source[50:60], np.arange(50, 60))
+    assert {m for _, m in pairs} <= {25, 85, 95}
+
+
+def test_a_dance_half_a_beat_late_is_put_on_the_beat():
+    music_beats = np.arange(20, 290, 16)  # 112.5 bpm
+    dance = swinging_dance(music_beats + 5, 300)
+    before = beat_align_score(music_beats, motion_beats(dance.joint_positions()))
+    result = beat_lock(dance, music_beats)
+    after_beats = motion_beats(result.motion.joint_positions())
+    after = beat_align_score(music_beats, after_beats)
+    assert before < 0.5 and after > 0.9
+    assert result.motion.num_frames == dance.num_frames
+    assert len(result.pairs) >= len(music_beats) - 2
+
+
+def test_given_frames_stay_exactly():
+    music_beats = np.arange(20, 290, 16)
+    dance = swinging_dance(music_beats + 5, 300)
+    fixed = np.zeros(300, bool)
+    fixed[:30] = fixed[200:230] = True
+    result = beat_lock(dance, music_beats, fixed)
+    np.testing.assert_array_equal(result.motion.rotations[fixed], dance.rotations[fixed])
+    np.testing.assert_array_equal(result.motion.root_positions[fixed], dance.root_positions[fixed])
+    assert not np.allclose(result.motion.rotations[~fixed], dance.rotations[~fixed])
+
+
+def test_bad_settings_are_refused():
+    with pytest.raises(ParameterError):
+        BeatLockConfig(min_speed=1.2)
+    with pytest.raises(ParameterError):
+        beat_lock(swinging_dance(np.array([20]), 60), np.array([20]), np.zeros(10, bool))
