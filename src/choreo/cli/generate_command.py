@@ -28,6 +28,8 @@ SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
 BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
                          help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
+FOOT_LOCK = typer.Option(True, "--foot-lock/--no-foot-lock",
+                         help="Let planted feet carry the body instead of sliding (given frames stay).")
 
 
 def generate(
@@ -43,7 +45,7 @@ def generate(
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
-    beat_lock: bool = BEAT_LOCK,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Generate a dance for a song, or for many songs in one run.
 
@@ -83,7 +85,7 @@ def generate(
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
-                        beat_lock)
+                        beat_lock, foot_lock)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
@@ -108,7 +110,7 @@ def inbetween(
     key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
 
@@ -136,7 +138,7 @@ def inbetween(
             fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
         return fixed
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock, foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -147,7 +149,7 @@ def inpaint(
     joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
 
@@ -170,7 +172,7 @@ def inpaint(
             raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
         return fixed
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock, foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -179,7 +181,7 @@ def trajectory(
     path: Path = typer.Option(..., help="Root path on the floor: CSV (x,z or t,x,z; optional y) or a motion file."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
 
@@ -193,7 +195,7 @@ def trajectory(
         xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
         return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock, foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -210,7 +212,8 @@ class Settings:
     seed: int
     format: str | None
     preview: bool = False  # render an MP4 with the music beside the first output file
-    beat_lock: bool = True  # the finishing pass: motion beats re-timed onto the music's beats
+    beat_lock: bool = True  # finishing: motion beats re-timed onto the music's beats
+    foot_lock: bool = True  # finishing: planted feet's drift moved onto the root
 
 
 def load_backend(settings: Settings, **factory_options):
@@ -226,6 +229,18 @@ def load_backend(settings: Settings, **factory_options):
         if checkpoint is None or not Path(checkpoint).is_file():
             raise ChoreoError(f"{settings.generator} has no bundled checkpoint; pass --checkpoint")
     return plugin.factory(checkpoint, **factory_options)
+
+
+def finish(motion, music, constraints, settings: Settings):
+    """The finishing passes every dance goes through: beat lock, then foot lock (choreo.finishing)."""
+    from ..finishing import beat_lock, foot_lock
+
+    fixed = None if constraints is None else constraints.fixed_frames()
+    if settings.beat_lock:
+        motion = beat_lock(motion, music.beat_frames, fixed).motion
+    if settings.foot_lock:
+        motion = foot_lock(motion, fixed)
+    return motion
 
 
 def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
@@ -250,10 +265,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
         motion = backend.generate(request, progress=lambda fraction: update(round(fraction * 100), 100))
-    if settings.beat_lock:
-        from ..finishing import beat_lock
-
-        motion = beat_lock(motion, music.beat_frames, None if constraints is None else constraints.fixed_frames()).motion
+    motion = finish(motion, music, constraints, settings)
     seconds = time.perf_counter() - started
     meta = motion.metadata
     if meta.get("style_notice"):

@@ -8,7 +8,7 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import BEAT_LOCK, CHECKPOINT, OUTPUT, SONG, Settings, dance_one, load_backend
+from .generate_command import BEAT_LOCK, CHECKPOINT, FOOT_LOCK, OUTPUT, SONG, Settings, dance_one, load_backend
 from .progress import progress_bar, stderr_console
 
 
@@ -40,7 +40,7 @@ def graph_dance(
     seed: int = typer.Option(0, help="Recorded in the output; the graph search itself is deterministic."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
-    beat_lock: bool = BEAT_LOCK,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
 
@@ -53,7 +53,7 @@ def graph_dance(
 
     if top_k < 1:
         raise ParameterError("--top-k must be at least 1")
-    settings = Settings(style, checkpoint, "graph", None, 1.0, "ddim", seed, format, preview, beat_lock)
+    settings = Settings(style, checkpoint, "graph", None, 1.0, "ddim", seed, format, preview, beat_lock, foot_lock)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo)
     dance_one(backend, song, output, settings)
 
