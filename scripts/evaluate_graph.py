@@ -1,6 +1,6 @@
 """Score ChoreoGraph on the M2D test split with a repertoire cut from the M2D train split.
 
-    python scripts/evaluate_graph.py [CHECKPOINT] [--top-k 512] [--variants full no-retempo motion-graph no-repeat-cost]
+    python scripts/evaluate_graph.py [CHECKPOINT] [--top-k 512] [--variants full no-retempo motion-graph no-repeat-cost] [--finished]
                                      [--stride 2] [--save-repertoire m2d_train.npz] [--whole-songs]
 
 One 5 s dance per test window (2.5 s stride, as the reference row), danced from that window's
@@ -71,6 +71,8 @@ def main() -> None:
     parser.add_argument("--save-repertoire", default=None)
     parser.add_argument("--repertoire", default=None, help="use this repertoire instead of cutting the train split")
     parser.add_argument("--whole-songs", action="store_true", help="count replayed seconds on whole test songs")
+    parser.add_argument("--finished", action="store_true",
+                        help="also score each dance after the beat and foot lock (choreo.finishing), side by side")
     args = parser.parse_args()
 
     clips = load_dataset(args.data)
@@ -99,10 +101,11 @@ def main() -> None:
     for top_k in args.top_k:
         for variant in args.variants:
             config = replace(GraphConfig(top_k=top_k), **VARIANTS[variant])
-            started = time.perf_counter()
-            dances = generate_window_dances(generator, windows, mels, config)
-            label = f"{variant}, K={top_k} ({time.perf_counter() - started:.0f} s)"
-            print(table_row(label, score(dances, reference)), flush=True)
+            for finished in (False, True) if args.finished else (False,):
+                started = time.perf_counter()
+                dances = generate_window_dances(generator, windows, mels, config, finished)
+                label = f"{variant}, K={top_k}{', finished' if finished else ''} ({time.perf_counter() - started:.0f} s)"
+                print(table_row(label, score(dances, reference)), flush=True)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """Score SGMD checkpoints on the M2D test split against the train split (the reference row's setup).
 
-    python scripts/evaluate_sgmd.py CHECKPOINT [CHECKPOINT ...] [--guidance 1 2] [--steps 20 50] [--no-style]
+    python scripts/evaluate_sgmd.py CHECKPOINT [CHECKPOINT ...] [--guidance 1 2] [--steps 20 50] [--no-style] [--finished]
 
 One 5 s dance per test window (2.5 s stride), generated from that window's music and the clip's
 genre; one markdown row per checkpoint x guidance x steps, beside the reference row's columns.
@@ -32,6 +32,8 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--no-style", action="store_true")
     parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--finished", action="store_true",
+                        help="also score each dance after the beat and foot lock (choreo.finishing), side by side")
     args = parser.parse_args()
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -44,11 +46,13 @@ def main() -> None:
         for guidance in args.guidance:
             for steps in args.steps:
                 started = time.time()
-                options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed)
-                dances = generate_window_dances(generator, windows, options, with_style=not args.no_style)
                 label = (f"{Path(checkpoint).name} step {generator.trained_steps}, w={guidance:g}, DDIM {steps}"
                          + (", no style" if args.no_style else ""))
-                print(table_row(label, score(dances, train)) + f" <!-- {time.time() - started:.0f} s -->", flush=True)
+                for finished in (False, True) if args.finished else (False,):
+                    options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed)  # same noise both times
+                    dances = generate_window_dances(generator, windows, options, not args.no_style, finished)
+                    print(table_row(label + (", finished" if finished else ""), score(dances, train))
+                          + f" <!-- {time.time() - started:.0f} s -->", flush=True)
 
 
 if __name__ == "__main__":

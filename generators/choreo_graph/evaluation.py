@@ -9,7 +9,7 @@ import numpy as np
 
 from choreo.datasets import Clip
 from choreo.metrics import Dance
-from choreo.metrics.protocol import music_beats
+from choreo.metrics.protocol import window_dance
 
 from .config import GraphConfig
 from .data import clip_mel
@@ -29,10 +29,8 @@ def window_mels(clips: Sequence[Clip]) -> dict[str, np.ndarray]:
 
 
 def generate_window_dances(generator: ChoreoGraphGenerator, windows: Sequence, mels: dict[str, np.ndarray],
-                           config: GraphConfig = GraphConfig()) -> list[Dance]:
-    """A dance for every scoring window, scored against that window's music beats."""
-    dances = []
-    for w in windows:
-        motion = generator.dance(mels[w.clip][w.start_frame : w.start_frame + len(w.features)], config)
-        dances.append(Dance(f"{w.clip}@{w.start_frame}", motion.joint_positions(), music_beats(w.features)))
-    return dances
+                           config: GraphConfig = GraphConfig(), finished: bool = False) -> list[Dance]:
+    """A dance for every scoring window, scored against that window's music beats (``finished``:
+    after the beat and foot lock, as `choreo graph` writes it)."""
+    return [window_dance(w, generator.dance(mels[w.clip][w.start_frame: w.start_frame + len(w.features)], config), finished)
+            for w in windows]

@@ -13,7 +13,7 @@ import torch
 
 from choreo.constraints import Constraints
 from choreo.metrics import Dance
-from choreo.metrics.protocol import music_beats
+from choreo.metrics.protocol import window_dance
 from choreo.motion import Motion, vector_to_motion
 
 from .generator import SGMDGenerator
@@ -44,7 +44,8 @@ def generate_window_motions(generator: SGMDGenerator, windows: Sequence, options
 
 
 def generate_window_dances(generator: SGMDGenerator, windows: Sequence, options: SamplingOptions,
-                           with_style: bool = True) -> list[Dance]:
-    """A generated dance for every scoring window, scored against that window's music beats."""
+                           with_style: bool = True, finished: bool = False) -> list[Dance]:
+    """A generated dance for every scoring window, scored against that window's music beats
+    (``finished``: after the beat and foot lock, as `choreo generate` writes it)."""
     motions = generate_window_motions(generator, windows, options, with_style)
-    return [Dance(f"{w.clip}@{w.start_frame}", m.joint_positions(), music_beats(w.features)) for w, m in zip(windows, motions)]
+    return [window_dance(w, m, finished) for w, m in zip(windows, motions)]

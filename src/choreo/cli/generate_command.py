@@ -28,8 +28,8 @@ SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
 BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
                          help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
-FOOT_LOCK = typer.Option(True, "--foot-lock/--no-foot-lock",
-                         help="Let planted feet carry the body instead of sliding (given frames stay).")
+FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
+                         help="Let planted feet carry the body instead of sliding (halves PFC, doubles FID_g: off by default).")
 
 
 def generate(
@@ -213,7 +213,7 @@ class Settings:
     format: str | None
     preview: bool = False  # render an MP4 with the music beside the first output file
     beat_lock: bool = True  # finishing: motion beats re-timed onto the music's beats
-    foot_lock: bool = True  # finishing: planted feet's drift moved onto the root
+    foot_lock: bool = False  # finishing: planted feet's drift moved onto the root (measured: off)
 
 
 def load_backend(settings: Settings, **factory_options):
@@ -233,21 +233,17 @@ def load_backend(settings: Settings, **factory_options):
 
 def finish(motion, music, constraints, settings: Settings):
     """The finishing passes every dance goes through: beat lock, then foot lock (choreo.finishing)."""
-    from ..finishing import beat_lock, foot_lock
+    from ..finishing import finish as finish_motion
 
     fixed = None if constraints is None else constraints.fixed_frames()
-    if settings.beat_lock:
-        motion = beat_lock(motion, music.beat_frames, fixed).motion
-    if settings.foot_lock:
-        motion = foot_lock(motion, fixed)
-    return motion
+    return finish_motion(motion, music.beat_frames, fixed, beat=settings.beat_lock, foot=settings.foot_lock)
 
 
 def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
     """Analyse one song, build its constraints, dance, write every output atomically; a summary."""
     from ..errors import ParameterError
     from ..fileio import check_output_dir
-    from ..formats import write_motion
+    from ..formats import check_output_format, write_motions
     from ..generator import GenerationRequest
     from ..music import Music
 
@@ -256,6 +252,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     for path in output:
         if path != "-":
             check_output_dir(path)
+        check_output_format(path, settings.format)  # every output checked before any work or any file
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)))
     constraints = build_constraints(music) if build_constraints else None
@@ -270,8 +267,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     meta = motion.metadata
     if meta.get("style_notice"):
         stderr_console.print(f"[yellow]note:[/yellow] {meta['style_notice']}")
-    for path in output:
-        write_motion(motion, path, format=settings.format)
+    write_motions(motion, output, format=settings.format)
     written = [path for path in output if path != "-"]
     if settings.preview and written:
         from ..render import RenderConfig

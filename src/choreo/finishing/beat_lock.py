@@ -32,10 +32,11 @@ from ..motion import Motion
 class BeatLockConfig:
     min_speed: float = 0.75  # the slowest local playback speed of the dance
     max_speed: float = 1.33  # the fastest
-    max_shift_seconds: float = 0.35  # how far a motion beat may move to reach a music beat
+    max_shift_seconds: float = 0.5  # how far a motion beat may move to reach a music beat
     speed_cost: float = 0.5  # per pair, times |log speed|: prefer small changes of pace
     smoothing_frames: float = 2.0  # sigma of the speed smoothing (no kinks at the pairs)
     max_skip: int = 6  # a pair may follow one up to this many motion beats earlier
+    pulse_bonus: float = 1.0  # extra reward when consecutive pairs are one or two music beats apart (the pulse)
 
     def __post_init__(self):
         if not 0 < self.min_speed <= 1 <= self.max_speed:
@@ -103,6 +104,7 @@ def choose_pairs(dance_beats: np.ndarray, music_beats: np.ndarray, start: int, s
     nodes = [(start, start)] + [(int(d), int(m)) for d in dance_beats for m in music_beats if abs(m - d) <= reach]
     nodes.sort()
     order = {d: i for i, d in enumerate(sorted(set(int(d) for d in dance_beats)))}
+    beat_number = {int(m): k for k, m in enumerate(sorted(set(int(m) for m in music_beats)))}
     score = np.full(len(nodes), -np.inf)
     back = np.full(len(nodes), -1)
     score[0] = 0.0
@@ -123,8 +125,13 @@ def choose_pairs(dance_beats: np.ndarray, music_beats: np.ndarray, start: int, s
             if i > 0 and order[nodes[j][0]] - order[nodes[i][0]] > config.max_skip:
                 continue
             cost = step_cost(nodes[i], nodes[j])
-            if cost is not None and score[i] + 1.0 - cost > score[j]:
-                score[j], back[j] = score[i] + 1.0 - cost, i
+            if cost is None:
+                continue
+            gain = 1.0 - cost
+            if i > 0 and beat_number[nodes[j][1]] - beat_number[nodes[i][1]] in (1, 2):
+                gain += config.pulse_bonus
+            if score[i] + gain > score[j]:
+                score[j], back[j] = score[i] + gain, i
     best, best_total = 0, 0.0  # the identity (no pair) scores 0
     for j in range(1, len(nodes)):
         cost = step_cost(nodes[j], (stop, stop))

@@ -2,10 +2,11 @@
 
 from .aistpp import AISTPP_FPS, read_aistpp_pkl, write_aistpp_pkl
 from .bvh import BvhData, parse_bvh, read_bvh, read_bvh_raw, write_bvh
-from .registry import FORMATS, MotionFormat, list_formats, read_joint_positions, read_motion, write_motion
+from .registry import (FORMATS, MotionFormat, check_output_format, list_formats, read_joint_positions, read_motion,
+                       write_motion, write_motions)
 
 __all__ = [
     "AISTPP_FPS", "BvhData", "FORMATS", "MotionFormat", "list_formats", "parse_bvh", "read_aistpp_pkl",
     "read_bvh", "read_bvh_raw", "read_joint_positions", "read_motion", "write_aistpp_pkl", "write_bvh",
-    "write_motion",
+    "write_motion", "write_motions", "check_output_format",
 ]  # fmt: skip

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -90,6 +92,25 @@ def read_joint_positions(path: str | os.PathLike, format: str | None = None) -> 
         if stored is not None and stored.shape == (motion.num_frames, 24, 3):
             return stored, motion.fps
     return motion.joint_positions(), motion.fps
+
+
+def check_output_format(path: str | os.PathLike, format: str | None = None) -> None:
+    """Refuse (OutputError, exit 3) an output whose format is unknown, before any work is done."""
+    if str(path) == STDOUT and format is None:
+        raise OutputError("writing to stdout (-) needs an explicit --format")
+    _format_for(path, format, OutputError)
+
+
+def write_motions(motion: Motion, paths: list[str], format: str | None = None) -> list[str]:
+    """Write ``motion`` to every path, all or none: each file is written in full to a temporary
+    beside it, and only when every one is written are they moved into place."""
+    for path in paths:
+        check_output_format(path, format)
+    with contextlib.ExitStack() as stack:
+        for path in paths:
+            handle = stack.enter_context(atomic_output(path))
+            _format_for(path, format, OutputError).write(motion, handle)
+    return [str(p) for p in paths]
 
 
 def write_motion(motion: Motion, path: str | os.PathLike, format: str | None = None) -> str:

@@ -30,6 +30,16 @@ def music_beats(features: np.ndarray) -> np.ndarray:
     return np.flatnonzero(features[:, BEAT_COLUMN] > 0.5)
 
 
+def window_dance(window, motion, finished: bool = False) -> Dance:
+    """A generated ``motion`` for a scoring window as a Dance, optionally after the finishing passes."""
+    beats = music_beats(window.features)
+    if finished:
+        from ..finishing import finish
+
+        motion = finish(motion, beats)
+    return Dance(f"{window.clip}@{window.start_frame}", motion.joint_positions(), beats)
+
+
 def windows_as_dances(clips: Sequence[Clip]) -> list[Dance]:
     """Real motion of each scoring window, with that window's music beats."""
     return [Dance(f"{w.clip}@{w.start_frame}", w.motion.joint_positions(), music_beats(w.features))
