@@ -21,8 +21,8 @@ def run_cli(capsys, *args):
     return code, out, err
 
 
-def assert_one_line_error(code, err):
-    assert code != 0
+def assert_one_line_error(code, err, exit_code=2):
+    assert code == exit_code, err
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1, err
     assert lines[0].startswith("choreo: error: ")
@@ -135,14 +135,14 @@ def test_truncated_bvh_is_one_line_error_and_writes_nothing(tmp_path, capsys):
 def test_output_in_missing_folder_is_one_line_error(tmp_path, capsys):
     write_dance(tmp_path / "dance.bvh")
     code, _, err = run_cli(capsys, "convert", tmp_path / "dance.bvh", tmp_path / "nowhere" / "out.bvh")
-    assert_one_line_error(code, err)
+    assert_one_line_error(code, err, exit_code=3)  # an output that cannot be written
     assert not (tmp_path / "nowhere").exists()
 
 
 def test_missing_input_and_unknown_command(tmp_path, capsys):
     assert_one_line_error(*run_cli(capsys, "info", tmp_path / "absent.bvh")[::2])
     code, _, _ = run_cli(capsys, "no-such-command")
-    assert code != 0
+    assert code == 2  # a usage error, as the README's table says
 
 
 @pytest.mark.skipif(not AISTPP_FIXTURES.is_dir(), reason="AIST++ fixtures not generated")

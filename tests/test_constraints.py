@@ -216,7 +216,7 @@ def test_bad_constraints_give_one_line_and_no_output(tiny_generator, song_file, 
     extra = [e.format(**files) for e in extra]
     code, err = run_cli(capsys, command, song_file, *extra, "--checkpoint", tiny_generator.checkpoint, "--steps", "1",
                         "-o", tmp_path / "out.bvh")
-    assert code != 0 and message in err, err
+    assert code == 2 and message in err, err  # bad input
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not (tmp_path / "out.bvh").exists()
 

@@ -76,6 +76,6 @@ def test_eval_errors_are_one_line(tmp_path, capsys):
                  ["eval", str(tmp_path / "bad.npy"), "--gt", str(tmp_path / "bad.npy")]):
         code = main(args)
         err = capsys.readouterr().err
-        assert code != 0
+        assert code == 2  # bad input
         lines = [line for line in err.splitlines() if line.strip()]
         assert len(lines) == 1 and lines[0].startswith("choreo: error:"), err

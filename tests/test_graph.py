@@ -231,7 +231,7 @@ def test_cli_graph_and_build(tiny_graph, tmp_path, capsys):
     capsys.readouterr()
     too_slow = tmp_path / "none.npz"  # the swaying dance travels at up to 0.3 m/s: nothing passes 0.1
     assert main(["graph", "build", "--motion", str(dance), "--checkpoint", str(checkpoint), "--max-root-speed", "0.1",
-                 "-o", str(too_slow)]) != 0
+                 "-o", str(too_slow)]) == 2  # bad input: nothing in it can be used
     assert "faster than the speed limit" in capsys.readouterr().err and not too_slow.exists()
     out = tmp_path / "dance.npz"
     code = main(["graph", str(SONG), "-o", str(out), "--checkpoint", str(checkpoint), "--repertoire", str(built), "-k", "2"])
@@ -240,4 +240,4 @@ def test_cli_graph_and_build(tiny_graph, tmp_path, capsys):
     bad = tmp_path / "none.bvh"
     code = main(["graph", str(SONG), "-o", str(bad), "--checkpoint", str(checkpoint), "--repertoire", str(tmp_path / "missing.npz")])
     err = capsys.readouterr().err
-    assert code != 0 and not bad.exists() and "does not exist" in err and "Traceback" not in err
+    assert code == 2 and not bad.exists() and "does not exist" in err and "Traceback" not in err

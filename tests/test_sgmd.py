@@ -269,7 +269,7 @@ def test_generate_writes_several_formats_deterministically(tiny_checkpoint, tmp_
 def test_generate_refuses_bad_options_in_one_line(tiny_checkpoint, tmp_path, capsys, extra, message):
     options = ["--checkpoint", tiny_checkpoint] if "--checkpoint" not in extra else []
     code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "a.bvh", *options, *extra)
-    assert code != 0 and message in err and len(err.strip().splitlines()) == 1
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "a.bvh").exists()
 
 
