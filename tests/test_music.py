@@ -164,11 +164,13 @@ def test_truncated_mp3(tmp_path):
         _one_line(error)
 
 
+# VmHWM is this process's own peak: getrusage's ru_maxrss would carry the pytest parent's peak
+# over fork and exec, so the child could never report less than the parent and the test could not fail.
 PEAK_RSS_SCRIPT = """
-import resource, sys
+import re, sys
 from choreo.music import Music
 Music.from_file(sys.argv[1])
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+print(re.search(r"VmHWM:\\s+(\\d+) kB", open("/proc/self/status").read()).group(1))
 """
 
 
