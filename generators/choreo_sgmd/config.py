@@ -68,7 +68,7 @@ class TrainConfig:
     seed: int = 0
     prompt_kind: str = "description"
     num_threads: int = 0  # 0: torch's default
-    mirror: bool = True  # also train on every clip's mirror image
+    mirror: bool = False  # also train on every clip's mirror image (off: ballroom is chiral, docs/sgmd.md)
     stretch: tuple[float, ...] = (0.85, 1.0, 1.18)  # and on it danced at these paces, music along
     genre_balance: float = 0.5  # draw windows with weight (windows of their genre)^-genre_balance
 

@@ -42,7 +42,8 @@ class WindowTensors:
 
 @dataclass(frozen=True)
 class Augmentation:
-    """Copies of each training clip a real dancer could have danced: mirrored, faster, slower."""
+    """Copies of each training clip a real dancer could have danced: faster, slower and, for
+    styles without a handedness, mirrored (not ballroom: docs/sgmd.md)."""
 
     mirror: bool = False
     stretch: tuple[float, ...] = (1.0,)  # pace factors; music features are stretched along

@@ -1,9 +1,10 @@
 """Honest ways to multiply dance data: a mirrored dancer and a dance at another pace.
 
-Both produce motion a real dancer could have performed: the mirror image of a performance
-(left and right swapped, the path reflected) and the same steps danced faster or slower. The
-music features are stretched with the motion by :func:`choreo.music.stretch_features`, so beats
-stay on beats.
+The same steps danced faster or slower are motion a real dancer could perform; the music
+features are stretched with the motion by :func:`choreo.music.stretch_features`, so beats stay on
+beats. The mirror image (left and right swapped, the path reflected) is one only for styles
+without a handedness: ballroom's hold, line of dance and turns are chiral, and mirrored M2D
+dances are far from real ones by FID (docs/sgmd.md).
 """
 
 from __future__ import annotations
