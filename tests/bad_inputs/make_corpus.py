@@ -61,6 +61,9 @@ def main() -> None:
     (HERE / "song.xyz").write_bytes(b"RIFF....WAVE")
     (HERE / "other_skeleton.bvh").write_text(THREE_JOINT_BVH)
     (HERE / "truncated.bvh").write_text(THREE_JOINT_BVH[: THREE_JOINT_BVH.index("MOTION") - 20])
+    # 80 bytes that made the parser loop forever: a negative channel count
+    (HERE / "negative_channels.bvh").write_text(
+        "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS -3 Xrotation\n}\nMOTION\nFrames: 1\nFrame Time: 0.03\n0\n")
     (HERE / "wrong_shape_path.csv").write_text("1,2,3,4\n5,6,7,8\n")
     (HERE / "corrupt_checkpoint.pt").write_bytes(b"PK\x03\x04 not really a checkpoint")
     torch.save({"generator": "graph", "format_version": 1}, HERE / "graph_checkpoint.pt")

@@ -223,6 +223,8 @@ def _parse_hierarchy(head: str, name: str) -> list[BvhJoint]:
                 count = int(count_text)
             except ValueError:
                 raise MotionFormatError(f"{name}: line {line}: bad channel count {count_text!r}") from None
+            if not 0 <= count <= 6:  # a joint has at most 3 position and 3 rotation channels
+                raise MotionFormatError(f"{name}: line {line}: CHANNELS {count} (a joint has 0 to 6)")
             channels = [t.lower() for t, _ in take(count)]
             valid = {f"{axis}{kind}" for axis in "xyz" for kind in ("position", "rotation")}
             if any(c not in valid for c in channels) or not stack or stack[-1] < 0:
