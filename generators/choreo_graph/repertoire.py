@@ -15,8 +15,9 @@ from typing import Callable, Sequence
 import numpy as np
 import torch
 
-from choreo.errors import InputError
+from choreo.errors import InputError, MotionFormatError
 from choreo.fileio import atomic_path
+from choreo.formats.safe_arrays import load_npz
 from choreo.motion import Motion
 from choreo.motion.stitch import frame_local_positions, local_positions
 from choreo.skeleton import SMPL24
@@ -77,10 +78,13 @@ class Repertoire:
         if not path.is_file():
             raise InputError(f"repertoire {path} does not exist")
         try:
-            with np.load(path, allow_pickle=False) as data:
-                if int(data["format_version"]) != FORMAT_VERSION:
-                    raise InputError(f"{path} has repertoire format {int(data['format_version'])}, expected {FORMAT_VERSION}")
-                values = {f.name: data[f.name] for f in fields(cls)}
+            try:
+                data = load_npz(path)  # sizes checked before anything is decompressed
+            except MotionFormatError as error:
+                raise InputError(f"{path} is not a readable repertoire: {str(error).removeprefix(f'{path}: ')}") from None
+            if int(data["format_version"]) != FORMAT_VERSION:
+                raise InputError(f"{path} has repertoire format {int(data['format_version'])}, expected {FORMAT_VERSION}")
+            values = {f.name: data[f.name] for f in fields(cls)}
         except InputError:
             raise
         except Exception as error:

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import MotionFormatError
 from ..motion import Motion
+from .safe_arrays import load_npy
 
 
 def write_npy(motion: Motion, handle) -> None:
@@ -18,7 +19,7 @@ def write_npy(motion: Motion, handle) -> None:
 
 def read_npy_joint_positions(path) -> np.ndarray:
     try:
-        positions = np.load(path, allow_pickle=False)
+        positions = load_npy(path)  # the header's size checked against the file before loading
     except (OSError, ValueError, EOFError) as error:
         raise MotionFormatError(f"{path}: not a readable .npy array ({type(error).__name__})") from None
     if positions.ndim == 2 and positions.shape[1] == 72:

@@ -9,13 +9,13 @@ Keys written: ``smpl_poses`` (T, 72) axis-angle, ``smpl_trans`` (T, 3) metres, `
 from __future__ import annotations
 
 import json
-import zipfile
 
 import numpy as np
 
 from ..errors import MotionFormatError
 from ..motion import Motion
 from ..skeleton import SMPL24
+from .safe_arrays import load_npz
 from .smpl_params import motion_to_smpl_params, smpl_params_to_motion
 
 DEFAULT_FPS = 30.0
@@ -31,11 +31,7 @@ def write_npz(motion: Motion, handle) -> None:
 
 
 def _load(path) -> dict[str, np.ndarray]:
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            return {key: data[key] for key in data.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as error:
-        raise MotionFormatError(f"{path}: not a readable NPZ file ({type(error).__name__})") from None
+    return load_npz(path)  # sizes checked before anything is decompressed
 
 
 def read_npz(path) -> Motion:
