@@ -1,8 +1,11 @@
-"""The finishing passes through the CLI, and several outputs written all or none."""
+"""The finishing passes through the CLI; outputs written all or none, and never over anything
+that is not a regular file."""
 
+import os
 from pathlib import Path
 
 import numpy as np
+import pytest
 from test_cli import EXAMPLE_SONG, run_cli
 
 from choreo.formats import read_motion
@@ -49,3 +52,28 @@ def test_an_unknown_second_output_leaves_no_first_output(tmp_path, capsys):
     assert code == 3 and "b.xyz" in err
     assert not Path(tmp_path / "a.bvh").exists()
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda p: p.mkdir(), "is a folder"),
+    (lambda p: os.mkfifo(p), "not a regular file"),
+    (lambda p: os.symlink("/dev/null", p), "link to something that is not a regular file"),
+])  # fmt: skip
+def test_outputs_that_are_not_regular_files_are_refused_before_any_work(tmp_path, capsys, make, words):
+    target = tmp_path / "dance.bvh"
+    make(target)
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", target, "--steps", "2")
+    assert code == 3 and words in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_symlinked_output_is_written_through_and_kept(tmp_path, capsys):
+    real, link = tmp_path / "real.bvh", tmp_path / "link.bvh"
+    real.write_text("old")
+    link.symlink_to(real)
+    assert run_cli(capsys, "generate", EXAMPLE_SONG, "-o", link, "--steps", "2")[0] == 0
+    assert link.is_symlink() and real.read_text().startswith("HIERARCHY")
+
+
+def test_a_name_too_long_is_an_output_error(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / ("a" * 300 + ".bvh"), "--steps", "2")
+    assert code == 3 and "cannot write" in err

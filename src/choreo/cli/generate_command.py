@@ -242,7 +242,7 @@ def finish(motion, music, constraints, settings: Settings):
 def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
     """Analyse one song, build its constraints, dance, write every output atomically; a summary."""
     from ..errors import ParameterError
-    from ..fileio import check_output_dir
+    from ..fileio import output_target
     from ..formats import check_output_format, write_motions
     from ..generator import GenerationRequest
     from ..music import Music
@@ -251,7 +251,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         raise ParameterError("with several outputs, name each by its extension (and at most one '-')")
     for path in output:
         if path != "-":
-            check_output_dir(path)
+            output_target(path)  # a writable folder, and nothing there that is not a regular file
         check_output_format(path, settings.format)  # every output checked before any work or any file
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)))
