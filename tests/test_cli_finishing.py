@@ -77,3 +77,8 @@ def test_a_symlinked_output_is_written_through_and_kept(tmp_path, capsys):
 def test_a_name_too_long_is_an_output_error(tmp_path, capsys):
     code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / ("a" * 300 + ".bvh"), "--steps", "2")
     assert code == 3 and "cannot write" in err
+
+
+def test_json_summary_and_motion_on_stdout_are_refused_together(capsys):
+    code, out, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", "-", "-f", "npz", "--json")
+    assert code == 2 and "standard output" in err and out == ""

@@ -65,6 +65,8 @@ def generate(
 
     if (output is None) == (out_dir is None):
         raise ParameterError("give either -o (one song) or --out-dir (any number of songs)")
+    if json_summary and output is not None and "-" in output:
+        raise ParameterError("--json and -o - both write to standard output: choose one")
     if output is not None and len(songs) > 1:
         raise ParameterError(f"{len(songs)} songs need --out-dir, not -o")
     if out_dir is not None:
