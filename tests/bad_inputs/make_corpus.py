@@ -21,6 +21,12 @@ def tone(seconds: float) -> np.ndarray:
     return (0.3 * np.sin(2 * np.pi * 330 * t)).astype(np.float32)
 
 
+def _deep_pickle(depth: int) -> bytes:
+    """A protocol-2 pickle of one float inside ``depth`` nested lists, written opcode by opcode
+    (pickle.dumps itself would recurse that deep)."""
+    return b"\x80\x02" + b"]" * depth + b"G?\xf0\x00\x00\x00\x00\x00\x00" + b"a" * depth + b"."
+
+
 THREE_JOINT_BVH = """HIERARCHY
 ROOT Hips
 {
@@ -61,6 +67,14 @@ def main() -> None:
     (HERE / "song.xyz").write_bytes(b"RIFF....WAVE")
     (HERE / "other_skeleton.bvh").write_text(THREE_JOINT_BVH)
     (HERE / "truncated.bvh").write_text(THREE_JOINT_BVH[: THREE_JOINT_BVH.index("MOTION") - 20])
+    # a few hundred bytes of shared lists that unfold into 2^40 items, and lists nested 2,000 deep
+    import pickle
+
+    shared = [1.0]
+    for _ in range(40):
+        shared = [shared, shared]
+    (HERE / "shared_lists_bomb.pkl").write_bytes(pickle.dumps({"smpl_poses": shared, "smpl_trans": shared}, protocol=2))
+    (HERE / "deeply_nested.pkl").write_bytes(_deep_pickle(2000))
     # 80 bytes that made the parser loop forever: a negative channel count
     (HERE / "negative_channels.bvh").write_text(
         "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS -3 Xrotation\n}\nMOTION\nFrames: 1\nFrame Time: 0.03\n0\n")

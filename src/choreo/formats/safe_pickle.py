@@ -6,8 +6,9 @@ shape it is told, and a single memo opcode can make the C unpickler grow its mem
 So (1) the opcode stream is checked first with pure-Python ``pickletools`` (allowed opcodes only,
 small memo indices), (2) the numpy globals are replaced by inert stand-ins that just record what
 the pickle asked for, and (3) arrays are built from those records with ``np.frombuffer`` after
-checking that the bytes present match the declared shape and a plain numeric dtype. Memory is
-then bounded by the file's size.
+checking that the bytes present match the declared shape and a plain numeric dtype; (4) shared
+containers are rebuilt once each, under a count and a depth limit. Memory is then bounded by the
+file's size.
 """
 
 from __future__ import annotations
@@ -157,20 +158,49 @@ def check_opcodes(data: bytes) -> None:
         raise UnsafePickle(f"malformed pickle ({type(error).__name__})") from None
 
 
-def _materialise(value):
-    if isinstance(value, _ArrayRecord):
-        if value.array is None:
-            raise UnsafePickle("array without data")
-        return value.array
-    if isinstance(value, (_DTypeRecord, _NdarrayMarker)) or value is _NdarrayMarker:
-        raise UnsafePickle("stray numpy object")
-    if isinstance(value, dict):
-        return {key: _materialise(item) for key, item in value.items()}
-    if isinstance(value, list):
-        return [_materialise(item) for item in value]
-    if isinstance(value, tuple):
-        return tuple(_materialise(item) for item in value)
-    return value
+MAX_DEPTH = 64  # containers inside containers: AIST++ files nest 2 deep
+MAX_OBJECTS = 1_000_000  # containers and items built: a 367-byte file of shared lists must not ask for 2^40
+
+
+class _Materialiser:
+    """Stand-ins to real values. A pickle may share one list many times over (its memo): each shared
+    object is built once, and the size of the tree the sharing unfolds into is counted, so neither
+    this nor anything that later walks the result (np.asarray on nested lists) can be asked for
+    2^40 items by a file of a few hundred bytes."""
+
+    def __init__(self):
+        self.built: dict[int, tuple[object, int]] = {}  # id -> (value, items in its unfolded tree)
+        self.total = 0
+
+    def __call__(self, value, depth: int = 0):
+        return self._build(value, depth)[0]
+
+    def _build(self, value, depth: int) -> tuple[object, int]:
+        if depth > MAX_DEPTH:
+            raise UnsafePickle(f"pickle nests containers more than {MAX_DEPTH} deep")
+        if isinstance(value, _ArrayRecord):
+            if value.array is None:
+                raise UnsafePickle("array without data")
+            return value.array, 1
+        if isinstance(value, (_DTypeRecord, _NdarrayMarker)) or value is _NdarrayMarker:
+            raise UnsafePickle("stray numpy object")
+        if not isinstance(value, (dict, list, tuple)):
+            return value, 1
+        if id(value) not in self.built:
+            items = value.items() if isinstance(value, dict) else enumerate(value)
+            parts = {key: self._build(item, depth + 1) for key, item in items}
+            size = 1 + sum(n for _, n in parts.values())
+            if isinstance(value, dict):
+                result = {key: part for key, (part, _) in parts.items()}
+            else:
+                result = [part for part, _ in parts.values()]
+                result = result if isinstance(value, list) else tuple(result)
+            self.built[id(value)] = (result, size)
+        result, size = self.built[id(value)]
+        self.total += size
+        if size > MAX_OBJECTS or self.total > MAX_OBJECTS * 4:
+            raise UnsafePickle(f"pickle unfolds into more than {MAX_OBJECTS:,} values")
+        return result, size
 
 
 def load_numpy_pickle(path: str | Path):
@@ -188,4 +218,4 @@ def load_numpy_pickle(path: str | Path):
         raise UnsafePickle("pickle nests too deeply") from None
     except Exception as error:  # malformed streams raise many kinds; none of them may escape
         raise UnsafePickle(f"unreadable pickle ({type(error).__name__})") from None
-    return _materialise(value)
+    return _Materialiser()(value)
