@@ -28,6 +28,13 @@ class ModelConfig:
     window_frames: int = 150  # 5 s at 30 fps
 
     def __post_init__(self):
+        sizes = {name: getattr(self, name) for name in ("frame_dim", "music_dim", "style_dim", "latent_dim", "ff_dim",
+                                                        "num_layers", "num_heads", "music_layers", "window_frames")}
+        bad = [f"{name}={value!r}" for name, value in sizes.items() if not isinstance(value, int) or not 0 < value <= 1 << 16]
+        if bad:
+            raise ValueError(f"model sizes must be whole numbers from 1 to 65536 ({', '.join(bad)})")
+        if not 0.0 <= self.dropout < 1.0:
+            raise ValueError(f"dropout must be in [0, 1), got {self.dropout}")
         if self.style_mode not in STYLE_MODES:
             raise ValueError(f"style_mode must be one of {STYLE_MODES}, got {self.style_mode!r}")
         if self.style_init not in STYLE_INITS:

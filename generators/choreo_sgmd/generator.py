@@ -10,7 +10,7 @@ import numpy as np
 import torch
 
 from choreo.constraints import Constraints, parse_style_schedule
-from choreo.errors import ParameterError
+from choreo.errors import InputError, ParameterError
 from choreo.generator import GenerationRequest, Generator
 from choreo.motion import Motion, vector_to_motion
 
@@ -24,23 +24,47 @@ from .schedule import NoiseSchedule
 from .style import Style, resolve_style
 
 
+def check_weights_fit(config: ModelConfig, weights: dict, where: str = "checkpoint") -> None:
+    """Refuse a checkpoint whose configuration and weights disagree, before anything is allocated:
+    the model is first laid out on torch's meta device (shapes, no memory), so a forged config
+    asking for 2^20-wide layers costs nothing."""
+    with torch.device("meta"):
+        layout = Denoiser(config).state_dict()
+    if not isinstance(weights, dict):
+        raise InputError(f"{where}: weights are not a dictionary of tensors")
+    missing = sorted(set(layout) - set(weights))
+    unexpected = sorted(set(weights) - set(layout))
+    wrong = [k for k in layout if k in weights and tuple(getattr(weights[k], "shape", ())) != tuple(layout[k].shape)]
+    if missing or unexpected or wrong:
+        first = (missing or unexpected or wrong)[0]
+        raise InputError(f"{where}: weights do not fit its configuration ({len(missing)} missing, "
+                         f"{len(unexpected)} unexpected, {len(wrong)} of the wrong shape, e.g. {first})")
+
+
 class SGMDGenerator(Generator):
     name = "sgmd"
 
     def __init__(self, checkpoint: str | Path, use_ema: bool = True):
         state = load_checkpoint(checkpoint)
         self.checkpoint = Path(checkpoint)
-        self.model_config = ModelConfig(**state["model_config"])
-        self.diffusion_config = DiffusionConfig(**state["diffusion_config"])
-        self.prompt_kind = state["prompt_kind"]
-        self.model = Denoiser(self.model_config).eval()
         if not use_ema and "state_dict" not in state:
             raise ParameterError(f"{checkpoint} holds EMA weights only (an inference checkpoint)")
-        self.model.load_state_dict(state["ema_state_dict" if use_ema else "state_dict"])
-        self.normalizer = Normalizer.from_state_dict(state["normalizer"])
-        self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
-        self.schedule = NoiseSchedule(self.diffusion_config)
-        self.trained_steps = int(state["step"])
+        try:
+            self.model_config = ModelConfig(**state["model_config"])
+            self.diffusion_config = DiffusionConfig(**state["diffusion_config"])
+            self.prompt_kind = state["prompt_kind"]
+            weights = state["ema_state_dict" if use_ema else "state_dict"]
+            check_weights_fit(self.model_config, weights, str(checkpoint))
+            self.model = Denoiser(self.model_config).eval()
+            self.model.load_state_dict(weights)
+            self.normalizer = Normalizer.from_state_dict(state["normalizer"])
+            self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
+            self.schedule = NoiseSchedule(self.diffusion_config)
+            self.trained_steps = int(state["step"])
+        except InputError:
+            raise
+        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as error:
+            raise InputError(f"{checkpoint}: damaged SGMD checkpoint ({type(error).__name__}: {str(error)[:120]})") from None
 
     def music_tensor(self, features: np.ndarray) -> torch.Tensor:
         """(..., T, music_dim) standardised model input from (..., T, 35) features (per window
