@@ -19,6 +19,7 @@ CASES = [
     ("not audio", "generate {c}/not_audio.mp3 -o {o}.bvh --checkpoint {k}", 2, "not a readable audio file"),
     ("empty file", "generate {c}/empty.wav -o {o}.bvh --checkpoint {k}", 2, "is empty"),
     ("silence", "generate {c}/silence.wav -o {o}.bvh --checkpoint {k}", 2, "is silent"),
+    ("float WAV with a NaN sample", "generate {c}/nan_sample.wav -o {o}.bvh --checkpoint {k}", 2, "NaN or infinite"),
     ("0.2 s of audio", "generate {c}/short.wav -o {o}.bvh --checkpoint {k}", 2, "too short"),
     ("truncated mp3", "generate {c}/truncated.mp3 -o {o}.bvh --checkpoint {k}", 2, "not a readable audio file"),
     ("corrupt mp3", "generate {c}/corrupt.mp3 -o {o}.bvh --checkpoint {k}", 2, "not a readable audio file"),

@@ -67,6 +67,10 @@ def main() -> None:
     (HERE / "song.xyz").write_bytes(b"RIFF....WAVE")
     (HERE / "other_skeleton.bvh").write_text(THREE_JOINT_BVH)
     (HERE / "truncated.bvh").write_text(THREE_JOINT_BVH[: THREE_JOINT_BVH.index("MOTION") - 20])
+    # float WAV with a NaN sample (librosa raised its own error on it: an internal error here)
+    nan_song = tone(3.0)
+    nan_song[1000] = np.nan
+    sf.write(HERE / "nan_sample.wav", nan_song, RATE, subtype="FLOAT")
     # a few hundred bytes of shared lists that unfold into 2^40 items, and lists nested 2,000 deep
     import pickle
 

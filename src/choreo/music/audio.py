@@ -105,6 +105,8 @@ def iter_audio_blocks(path: str | os.PathLike, sr: int, start: float | None = No
             except Exception as error:
                 raise AudioError(f"{path}: decoding failed at {position / native_sr:.1f} s ({error})") from None
             done = len(data) < want
+            if not np.isfinite(data).all():  # float WAVs can hold NaN or inf; nothing downstream could use them
+                raise AudioError(f"{path} contains invalid (NaN or infinite) samples near {position / native_sr:.1f} s")
             position += len(data)
             mono = data.mean(axis=1) if len(data) else np.zeros(0, np.float32)
             out = mono if resampler is None else resampler.resample_chunk(mono, last=done)
