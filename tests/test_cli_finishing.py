@@ -82,3 +82,41 @@ def test_a_name_too_long_is_an_output_error(tmp_path, capsys):
 def test_json_summary_and_motion_on_stdout_are_refused_together(capsys):
     code, out, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", "-", "-f", "npz", "--json")
     assert code == 2 and "standard output" in err and out == ""
+
+
+def test_batch_contract(tmp_path, capsys):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    song = EXAMPLE_SONG.read_bytes()
+    (tmp_path / "a" / "song.wav").write_bytes(song)
+    (tmp_path / "b" / "song.wav").write_bytes(song)
+    out = tmp_path / "out"
+    out.mkdir()
+    code, _, err = run_cli(capsys, "generate", tmp_path / "a" / "song.wav", tmp_path / "b" / "song.wav", "--out-dir", out)
+    assert code == 2 and "more than once" in err and list(out.iterdir()) == []
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "--out-dir", tmp_path / "missing")
+    assert code == 3  # like -o into a missing folder
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "x.bvh", "--generator", "nope")
+    assert code == 2 and "not available" in err
+
+
+def test_an_unexpected_failure_of_one_song_does_not_stop_the_batch(tmp_path, capsys, monkeypatch):
+    import json
+
+    from choreo.cli import generate_command
+
+    real = generate_command.dance_one
+
+    def flaky(backend, song, *args, **kwargs):
+        if song.name == "bad.wav":
+            raise RuntimeError("a bug")
+        return real(backend, song, *args, **kwargs)
+
+    monkeypatch.setattr(generate_command, "dance_one", flaky)
+    (tmp_path / "bad.wav").write_bytes(EXAMPLE_SONG.read_bytes())
+    code, out, err = run_cli(capsys, "generate", tmp_path / "bad.wav", EXAMPLE_SONG, "--out-dir", tmp_path,
+                             "--steps", "2", "--json")
+    summary = json.loads(out)
+    assert code == 1 and summary["failed"] == 1
+    assert [s["ok"] for s in summary["songs"]] == [False, True] and summary["songs"][0]["exit_code"] == 70
+    assert (tmp_path / f"{EXAMPLE_SONG.stem}.bvh").exists()

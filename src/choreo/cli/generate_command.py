@@ -61,7 +61,9 @@ def generate(
     """
     import json
 
-    from ..errors import ChoreoError, ParameterError
+    from collections import Counter
+
+    from ..errors import ChoreoError, OutputError, ParameterError
 
     if (output is None) == (out_dir is None):
         raise ParameterError("give either -o (one song) or --out-dir (any number of songs)")
@@ -72,7 +74,11 @@ def generate(
     if out_dir is not None:
         formats = [f.strip().lower().lstrip(".") for f in (format or "bvh").split(",") if f.strip()]
         if not out_dir.is_dir():
-            raise ParameterError(f"--out-dir {out_dir} is not a folder")
+            raise OutputError(f"--out-dir {out_dir} is not a folder")  # an output that cannot be written: 3
+        stems = Counter(song.stem for song in songs)
+        clashes = sorted(stem for stem, count in stems.items() if count > 1)
+        if clashes:
+            raise ParameterError(f"songs named {clashes[0]!r} more than once would write the same files in --out-dir")
 
     def outputs_for(song: Path) -> list[str]:
         return list(output) if output is not None else [str(out_dir / f"{song.stem}.{ext}") for ext in formats]
@@ -93,12 +99,14 @@ def generate(
     for song in songs:
         try:
             summaries.append(dance_one(backend, song, outputs_for(song), settings, constraints))
-        except ChoreoError as error:
-            if len(songs) == 1:
+        except Exception as error:  # noqa: BLE001 - in a batch, one song's failure, even a bug, must not stop the rest
+            if len(songs) == 1 or isinstance(error, KeyboardInterrupt):
                 raise
             failed += 1
-            stderr_console.print(f"[red]failed[/red] {song}: {error}", highlight=False)
-            summaries.append({"song": str(song), "ok": False, "error": str(error), "exit_code": error.exit_code})
+            code = error.exit_code if isinstance(error, ChoreoError) else 70
+            message = str(error) if isinstance(error, ChoreoError) else f"internal error ({type(error).__name__}: {error})"
+            stderr_console.print(f"[red]failed[/red] {song}: {message}", highlight=False)
+            summaries.append({"song": str(song), "ok": False, "error": message, "exit_code": code})
     if json_summary:
         print(json.dumps({"songs": summaries, "failed": failed}, indent=2))
     if failed:
@@ -219,12 +227,12 @@ class Settings:
 
 
 def load_backend(settings: Settings, **factory_options):
-    from ..errors import ChoreoError
+    from ..errors import ChoreoError, ParameterError
     from ..generator import available_plugins
 
     plugin = available_plugins().get(settings.generator)
     if plugin is None or plugin.factory is None:
-        raise ChoreoError(f"generator {settings.generator!r} is not available")
+        raise ParameterError(f"generator {settings.generator!r} is not available (see choreo generators)")
     checkpoint = settings.checkpoint
     if checkpoint is None:
         checkpoint = plugin.default_checkpoint
