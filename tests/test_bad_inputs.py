@@ -29,6 +29,7 @@ CASES = [
     ("truncated BVH", "convert {c}/truncated.bvh {o}.npz", 2, "no MOTION section"),
     ("AIST++ pickle of shared lists (2^40 when unfolded)", "convert {c}/shared_lists_bomb.pkl {o}.npz", 2, "unfolds"),
     ("pickle nested 2,000 deep", "convert {c}/deeply_nested.pkl {o}.npz", 2, "nests"),
+    ("BVH Frame Time 1e-320", "convert {c}/tiny_frame_time.bvh {o}.npz", 2, "Frame Time"),
     ("BVH with a negative channel count", "convert {c}/negative_channels.bvh {o}.npz", 2, "CHANNELS -3"),
     ("NaN in a motion", "inpaint {s} --motion {m}.nan.bvh -o {o}.bvh --checkpoint {k}", 2, "NaN"),
     ("infinite values in a motion", "convert {m}.inf.bvh {o}.npz", 2, "NaN or infinite"),

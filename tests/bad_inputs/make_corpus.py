@@ -79,6 +79,8 @@ def main() -> None:
         shared = [shared, shared]
     (HERE / "shared_lists_bomb.pkl").write_bytes(pickle.dumps({"smpl_poses": shared, "smpl_trans": shared}, protocol=2))
     (HERE / "deeply_nested.pkl").write_bytes(_deep_pickle(2000))
+    # a frame time whose inverse overflows (an internal error before)
+    (HERE / "tiny_frame_time.bvh").write_text(THREE_JOINT_BVH.replace("Frame Time: 0.0333333", "Frame Time: 1e-320"))
     # 80 bytes that made the parser loop forever: a negative channel count
     (HERE / "negative_channels.bvh").write_text(
         "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS -3 Xrotation\n}\nMOTION\nFrames: 1\nFrame Time: 0.03\n0\n")

@@ -248,9 +248,12 @@ def _parse_motion_header(part: str, name: str, line_offset: int) -> tuple[int, f
     time_match = re.match(r"\s*Frame\s+Time:\s*([0-9.eE+-]+)\s*$", header[1][1])
     if not frames_match or not time_match:
         raise MotionFormatError(f"{name}: MOTION section lacks 'Frames:' and 'Frame Time:' lines")
-    frame_time = float(time_match.group(1))
-    if not np.isfinite(frame_time) or frame_time <= 0:
-        raise MotionFormatError(f"{name}: bad Frame Time {time_match.group(1)}")
+    try:
+        frame_time = float(time_match.group(1))
+    except ValueError:
+        raise MotionFormatError(f"{name}: bad Frame Time {time_match.group(1)[:40]!r}") from None
+    if not np.isfinite(frame_time) or not 1e-3 <= frame_time <= 1.0:  # 1 to 1000 fps, as a Motion allows
+        raise MotionFormatError(f"{name}: Frame Time {time_match.group(1)} is not between 0.001 and 1 s")
     first = header[1][0] + 1
     rows = [line for line in lines[first:] if line.strip()]
     return int(frames_match.group(1)), frame_time, rows, line_offset + first

@@ -16,6 +16,8 @@ from ..skeleton import SMPL24, Skeleton, forward_kinematics
 from ..skeleton import rotations as rot
 
 DEFAULT_FPS = 30.0
+MIN_FPS, MAX_FPS = 1.0, 1000.0  # outside these, a frame rate is a damaged file, not a motion
+MAX_COORDINATE = 1e5  # metres: 100 km from the origin is a damaged file, and formats lose precision beyond
 FRAME_CHUNK = 4096  # frames converted at once where a whole song's intermediates would be large
 
 
@@ -49,8 +51,10 @@ class Motion:
             raise ParameterError(f"rotations must have shape {expected}, got {self.rotations.shape}")
         if not (np.isfinite(self.root_positions).all() and np.isfinite(self.rotations).all()):
             raise ParameterError("motion contains NaN or infinite values")
-        if not self.fps > 0:
-            raise ParameterError(f"fps must be positive, got {self.fps}")
+        if not MIN_FPS <= self.fps <= MAX_FPS:
+            raise ParameterError(f"fps must be between {MIN_FPS:g} and {MAX_FPS:g}, got {self.fps:g}")
+        if num_frames and np.abs(self.root_positions).max() > MAX_COORDINATE:
+            raise ParameterError(f"root positions beyond {MAX_COORDINATE:g} m (wrong units, or a damaged file)")
         norms = np.linalg.norm(self.rotations, axis=-1, keepdims=True)
         if (norms < 1e-8).any():
             raise ParameterError("motion contains a zero quaternion")
