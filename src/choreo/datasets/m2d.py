@@ -287,7 +287,7 @@ def motion_beat_times(markers: np.ndarray, fps: float, speed_sigma_frames: float
     Positions are first interpolated to 30 fps so every clip is treated as the BeatAlign metric
     treats generated motion (choreo.metrics.beats), whatever its source rate.
     """
-    from ..metrics.beats import motion_beats
+    from ..motion.beats import motion_beats
 
     source_time = np.arange(len(markers)) / fps
     time_30 = np.arange(int(np.floor(source_time[-1] * 30.0)) + 1) / 30.0

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from ..errors import ParameterError
-from ..metrics.beats import motion_beats
+from ..motion.beats import motion_beats
 from ..motion import Motion
 
 

@@ -1,7 +1,7 @@
 """Beat metrics: BeatAlign (Bailando/DGSDP) and ChoreoGraph's two beat distances.
 
-Motion beats are the moments the dancer nearly stops: strict local minima of the mean joint
-speed after Gaussian smoothing. All times here are in frames of the motion's own frame rate.
+Motion beats (choreo.motion.beats, re-exported here) are the moments the dancer nearly stops.
+All times here are in frames of the motion's own frame rate.
 """
 
 from __future__ import annotations
@@ -10,9 +10,9 @@ import warnings
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
-from scipy.signal import argrelextrema
 
-SPEED_SMOOTHING_SIGMA = 5.0  # frames, as in the reference code
+from ..motion.beats import SPEED_SMOOTHING_SIGMA, mean_joint_speed, motion_beats  # noqa: F401 (re-exported)
+
 BEAT_ALIGN_SIGMA = 3.0  # frames: 100 ms at 30 fps (50 ms at 60 fps)
 METRICAL_RATIOS = (0.5, 1.0, 2.0)  # the same pulse, counted every other beat or twice per beat
 LOCK_TOLERANCE = 0.04  # relative tempo difference still counted as the same (MIREX allows 8 %)
@@ -21,19 +21,6 @@ BEAT_TRAIN_SIGMA = 1.0  # frames
 
 class MetricWarning(UserWarning):
     """A metric was computed on degenerate input and returned its defined fallback value."""
-
-
-def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
-    """(T-1,) mean over joints of |p[t+1] - p[t]| (metres per frame)."""
-    return np.linalg.norm(np.diff(joint_positions, axis=0), axis=-1).mean(axis=-1)
-
-
-def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:
-    """Frame indices of motion beats: strict local minima (order 1) of the smoothed speed."""
-    if len(joint_positions) < 3:
-        return np.zeros(0, dtype=int)
-    speed = gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
-    return argrelextrema(speed, np.less, order=1)[0]
 
 
 def motion_beat_train(joint_positions: np.ndarray) -> np.ndarray:

@@ -1,11 +1,12 @@
 """The `Motion` type, foot contacts and the 151-d frame vector."""
 
 from .augment import mirrored, stretched
+from .beats import mean_joint_speed, motion_beats
 from .contacts import CONTACT_SPEED_THRESHOLD, foot_contacts
 from .motion import DEFAULT_FPS, Motion
 from .vector import FRAME_DIM, motion_to_vector, vector_to_motion
 
 __all__ = [
     "CONTACT_SPEED_THRESHOLD", "DEFAULT_FPS", "FRAME_DIM", "Motion", "foot_contacts",
-    "mirrored", "motion_to_vector", "stretched", "vector_to_motion",
+    "mean_joint_speed", "mirrored", "motion_beats", "motion_to_vector", "stretched", "vector_to_motion",
 ]  # fmt: skip

@@ -1,0 +1,24 @@
+"""Motion beats: the moments a dancer nearly stops (strict local minima of the mean joint speed
+after Gaussian smoothing). Motion analysis, used by the metrics (BeatAlign), by the dataset
+readers (M2D's music offsets) and by the beat lock; times are in frames of the motion's rate."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+from scipy.signal import argrelextrema
+
+SPEED_SMOOTHING_SIGMA = 5.0  # frames, as in the reference code
+
+
+def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
+    """(T-1,) mean over joints of |p[t+1] - p[t]| (metres per frame)."""
+    return np.linalg.norm(np.diff(joint_positions, axis=0), axis=-1).mean(axis=-1)
+
+
+def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:
+    """Frame indices of motion beats: strict local minima (order 1) of the smoothed speed."""
+    if len(joint_positions) < 3:
+        return np.zeros(0, dtype=int)
+    speed = gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
+    return argrelextrema(speed, np.less, order=1)[0]
