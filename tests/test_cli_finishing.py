@@ -120,3 +120,10 @@ def test_an_unexpected_failure_of_one_song_does_not_stop_the_batch(tmp_path, cap
     assert code == 1 and summary["failed"] == 1
     assert [s["ok"] for s in summary["songs"]] == [False, True] and summary["songs"][0]["exit_code"] == 70
     assert (tmp_path / f"{EXAMPLE_SONG.stem}.bvh").exists()
+
+
+def test_sampling_flags_given_to_the_graph_are_refused_by_name(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "x.bvh", "--generator", "graph",
+                           "--steps", "50", "--guidance", "3")
+    assert code == 2 and "--steps, --guidance apply to sgmd, not to graph" in err
+    assert not (tmp_path / "x.bvh").exists()

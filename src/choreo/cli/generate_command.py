@@ -22,8 +22,9 @@ STYLE = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text
 CHECKPOINT = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one.")
 GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
 STEPS = typer.Option(None, help="Sampling steps (default: the backend's: 10 DDIM steps for sgmd, 1000 for ddpm).")
-GUIDANCE = typer.Option(2.0, help="Classifier-free guidance weight on the music (1 = none).")
-SAMPLER = typer.Option("ddim", help="ddim (fast, any number of steps) or ddpm (the full chain).")
+GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the music (default 2; 1 = none).")
+SAMPLER = typer.Option(None, help="sgmd: ddim (default; fast, any number of steps) or ddpm (the full chain).")
+SAMPLING_DEFAULTS = {"guidance": 2.0, "sampler": "ddim"}  # sgmd's; other backends take none of these flags
 SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
 BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
@@ -40,7 +41,7 @@ def generate(
     style: Optional[str] = STYLE,
     seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it."),
     checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR, steps: Optional[int] = STEPS,
-    guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = typer.Option(None, "--format", "-f",
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
@@ -92,6 +93,7 @@ def generate(
         opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
                         beat_lock, foot_lock)
     backend = load_backend(settings)
@@ -119,7 +121,7 @@ def inbetween(
     end: Optional[str] = typer.Option(None, help="Pose on the last frame: FILE or FILE@FRAME."),
     key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
-    steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
@@ -148,7 +150,9 @@ def inbetween(
             fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
         return fixed
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock, foot_lock=foot_lock)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
+                        foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -158,7 +162,7 @@ def inpaint(
     frames: Optional[str] = typer.Option(None, help="Frames to regenerate, START:END (end exclusive); default all."),
     joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
-    steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
@@ -182,7 +186,9 @@ def inpaint(
             raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
         return fixed
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock, foot_lock=foot_lock)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
+                        foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -190,7 +196,7 @@ def trajectory(
     song: Path = SONG, output: List[str] = OUTPUT,
     path: Path = typer.Option(..., help="Root path on the floor: CSV (x,z or t,x,z; optional y) or a motion file."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
-    steps: Optional[int] = STEPS, guidance: float = GUIDANCE, sampler: str = SAMPLER, seed: int = SEED,
+    steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
@@ -205,7 +211,9 @@ def trajectory(
         xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
         return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
 
-    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock, foot_lock=foot_lock)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
+                        foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -224,6 +232,20 @@ class Settings:
     preview: bool = False  # render an MP4 with the music beside the first output file
     beat_lock: bool = True  # finishing: motion beats re-timed onto the music's beats
     foot_lock: bool = False  # finishing: planted feet's drift moved onto the root (measured: off)
+
+
+def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None) -> tuple[float, str]:
+    """(guidance, sampler) with sgmd's defaults; given to a backend that does not sample, a one-line
+    error naming the backend instead of a flag silently ignored."""
+    from ..errors import ParameterError
+
+    if generator != "sgmd":
+        given = [flag for flag, value in (("--steps", steps), ("--guidance", guidance), ("--sampler", sampler))
+                 if value is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} to sgmd, not to {generator}")
+    return (SAMPLING_DEFAULTS["guidance"] if guidance is None else guidance,
+            SAMPLING_DEFAULTS["sampler"] if sampler is None else sampler)
 
 
 def load_backend(settings: Settings, **factory_options):
