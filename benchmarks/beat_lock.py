@@ -49,13 +49,16 @@ def beat_profile(joint_positions: np.ndarray) -> np.ndarray:
     return beat_autocorrelation(joint_positions, int(2 * 60.0 * FPS / SLOWEST_BPM) + 1)
 
 
+SGMD_CHECKPOINT: Path | None = None  # --sgmd-checkpoint: score another SGMD model than the bundled one
+
+
 def generators() -> dict:
     import choreo_graph
     import choreo_sgmd
     from choreo_graph.generator import ChoreoGraphGenerator
     from choreo_sgmd.generator import SGMDGenerator
 
-    return {"SGMD": SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT),
+    return {"SGMD": SGMDGenerator(SGMD_CHECKPOINT or choreo_sgmd.DEFAULT_CHECKPOINT),
             "ChoreoGraph": ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT)}
 
 
@@ -152,7 +155,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--m2d", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "data" / "m2d")
+    parser.add_argument("--sgmd-checkpoint", type=Path, help="an SGMD checkpoint to score instead of the bundled one")
     args = parser.parse_args()
+    global SGMD_CHECKPOINT
+    SGMD_CHECKPOINT = args.sgmd_checkpoint
     started = time.perf_counter()
     outside = dance_outside_songs(args.seconds)
     if not outside:
