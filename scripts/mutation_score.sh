@@ -3,11 +3,12 @@
 #
 #   scripts/mutation_score.sh src/choreo/finishing/ "tests/test_beat_lock.py tests/test_foot_lock.py" [SECONDS]
 #
+# Give a folder (a package), not a single file: mutmut 3 then cannot import the mutated module.
 # Works on a throw-away clone in /tmp (mutmut rewrites the sources it mutates), with this
 # checkout's .venv (mutmut is installed into it if missing). Prints killed / survived / timeout /
 # untested counts and the surviving mutants; `mutmut show NAME` in the clone shows one.
 set -euo pipefail
-paths=${1:?"what to mutate, e.g. src/choreo/finishing/"}
+paths=${1:?"the folder to mutate, e.g. src/choreo/finishing/"}
 tests=${2:?"the test files that guard it, space-separated"}
 limit=${3:-1800}
 repo=$(cd "$(dirname "$0")/.." && pwd)
