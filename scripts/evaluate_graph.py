@@ -72,7 +72,8 @@ def main() -> None:
     parser.add_argument("--repertoire", default=None, help="use this repertoire instead of cutting the train split")
     parser.add_argument("--whole-songs", action="store_true", help="count replayed seconds on whole test songs")
     parser.add_argument("--finished", action="store_true",
-                        help="also score each dance after the beat and foot lock (choreo.finishing), side by side")
+                        help="also score each dance after the beat lock (choreo.finishing), side by side")
+    parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
     args = parser.parse_args()
 
     clips = load_dataset(args.data)
@@ -103,7 +104,7 @@ def main() -> None:
             config = replace(GraphConfig(top_k=top_k), **VARIANTS[variant])
             for finished in (False, True) if args.finished else (False,):
                 started = time.perf_counter()
-                dances = generate_window_dances(generator, windows, mels, config, finished)
+                dances = generate_window_dances(generator, windows, mels, config, finished, args.foot_lock)
                 label = f"{variant}, K={top_k}{', finished' if finished else ''} ({time.perf_counter() - started:.0f} s)"
                 print(table_row(label, score(dances, reference)), flush=True)
 

@@ -33,7 +33,8 @@ def main() -> None:
     parser.add_argument("--no-style", action="store_true")
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--finished", action="store_true",
-                        help="also score each dance after the beat and foot lock (choreo.finishing), side by side")
+                        help="also score each dance after the beat lock (choreo.finishing), side by side")
+    parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
     args = parser.parse_args()
     if args.threads:
         torch.set_num_threads(args.threads)
@@ -50,7 +51,8 @@ def main() -> None:
                          + (", no style" if args.no_style else ""))
                 for finished in (False, True) if args.finished else (False,):
                     options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed)  # same noise both times
-                    dances = generate_window_dances(generator, windows, options, not args.no_style, finished)
+                    dances = generate_window_dances(generator, windows, options, not args.no_style, finished,
+                                                    args.foot_lock)
                     print(table_row(label + (", finished" if finished else ""), score(dances, train))
                           + f" <!-- {time.time() - started:.0f} s -->", flush=True)
 

@@ -29,8 +29,12 @@ def window_mels(clips: Sequence[Clip]) -> dict[str, np.ndarray]:
 
 
 def generate_window_dances(generator: ChoreoGraphGenerator, windows: Sequence, mels: dict[str, np.ndarray],
-                           config: GraphConfig = GraphConfig(), finished: bool = False) -> list[Dance]:
+                           config: GraphConfig = GraphConfig(), finished: bool = False,
+                           foot_lock: bool = False) -> list[Dance]:
     """A dance for every scoring window, scored against that window's music beats (``finished``:
-    after the beat and foot lock, as `choreo graph` writes it)."""
-    return [window_dance(w, generator.dance(mels[w.clip][w.start_frame: w.start_frame + len(w.features)], config), finished)
-            for w in windows]
+    after the beat lock, as `choreo graph` writes it, and the foot lock when asked)."""
+    dances = []
+    for w in windows:
+        motion = generator.dance(mels[w.clip][w.start_frame: w.start_frame + len(w.features)], config)
+        dances.append(window_dance(w, motion, finished, foot_lock))
+    return dances

@@ -44,8 +44,8 @@ def generate_window_motions(generator: SGMDGenerator, windows: Sequence, options
 
 
 def generate_window_dances(generator: SGMDGenerator, windows: Sequence, options: SamplingOptions,
-                           with_style: bool = True, finished: bool = False) -> list[Dance]:
+                           with_style: bool = True, finished: bool = False, foot_lock: bool = False) -> list[Dance]:
     """A generated dance for every scoring window, scored against that window's music beats
-    (``finished``: after the beat and foot lock, as `choreo generate` writes it)."""
+    (``finished``: after the beat lock, as `choreo generate` writes it, and the foot lock when asked)."""
     motions = generate_window_motions(generator, windows, options, with_style)
-    return [window_dance(w, m, finished) for w, m in zip(windows, motions)]
+    return [window_dance(w, m, finished, foot_lock) for w, m in zip(windows, motions)]

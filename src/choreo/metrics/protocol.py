@@ -30,13 +30,14 @@ def music_beats(features: np.ndarray) -> np.ndarray:
     return np.flatnonzero(features[:, BEAT_COLUMN] > 0.5)
 
 
-def window_dance(window, motion, finished: bool = False) -> Dance:
-    """A generated ``motion`` for a scoring window as a Dance, optionally after the finishing passes."""
+def window_dance(window, motion, finished: bool = False, foot_lock: bool = False) -> Dance:
+    """A generated ``motion`` for a scoring window as a Dance, optionally after the finishing passes
+    (the beat lock, and the foot lock when asked)."""
     beats = music_beats(window.features)
     if finished:
         from ..finishing import finish
 
-        motion = finish(motion, beats)
+        motion = finish(motion, beats, foot=foot_lock)
     return Dance(f"{window.clip}@{window.start_frame}", motion.joint_positions(), beats)
 
 
