@@ -45,8 +45,8 @@ def main() -> None:
         real = np.concatenate([fastest_joint(c.motion.joint_positions(), c.motion.fps) for c in load_dataset(args.m2d)])
         limit = float(np.percentile(real, 99.9))
         print(f"real M2D: fastest joint per frame, 99.9th percentile {limit:.2f} m/s (max {real.max():.2f})")
-    with tempfile.TemporaryDirectory() as folder:
-        music = Music.from_file(write_song(Path(folder), args.minutes * 60))
+    folder = tempfile.TemporaryDirectory()  # kept to the end: the graph backend reads the song again
+    music = Music.from_file(write_song(Path(folder.name), args.minutes * 60))
     print(f"song: {args.minutes:g} min, heard at {music.tempo:.1f} bpm")
     print("| generator | dance | BeatAlign | PFC | mean jerk (mm/frame^3) | fastest joint (m/s) | frames above real 99.9 % |")
     print("| --- | --- | ---: | ---: | ---: | ---: | ---: |")
@@ -65,6 +65,7 @@ def main() -> None:
                   f"{speed.max():.2f} | {above} |")
         print(f"| {name} | beat lock took {spent:.2f} s ({60 * spent / raw.duration:.3f} s per minute), "
               f"{len(locked.pairs)} of {locked.motion_beats} motion beats paired | | | | | |")
+    folder.cleanup()
 
 
 if __name__ == "__main__":
