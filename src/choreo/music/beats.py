@@ -121,10 +121,12 @@ def _mean_at(envelope: np.ndarray, frames: np.ndarray) -> float:
     return float(np.interp(frames, np.arange(len(envelope)), envelope).mean()) if len(frames) else 0.0
 
 
-def beat_frames_at(beat_times: np.ndarray, fps: float, num_frames: int) -> np.ndarray:
-    """Beat times mapped to the nearest of ``num_frames`` frames at ``fps`` (unique, sorted)."""
+def beat_frames_at(beat_times: np.ndarray, fps: float, num_frames: int, keep: bool = False) -> np.ndarray:
+    """Beat times mapped to the nearest of ``num_frames`` frames at ``fps`` (unique, sorted), or
+    with ``keep`` the mask of the times that land on one of those frames."""
     frames = np.round(np.asarray(beat_times) * fps).astype(int)
-    return np.unique(frames[(frames >= 0) & (frames < num_frames)])
+    inside = (frames >= 0) & (frames < num_frames)
+    return inside if keep else np.unique(frames[inside])
 
 
 def onset_peaks(onset_envelope: np.ndarray, fps: float) -> np.ndarray:

@@ -166,8 +166,8 @@ def assemble_features(per_frame: np.ndarray, fps: float, envelopes: np.ndarray,
     """
     onset = per_frame[:, ONSET_COLUMN]
     tempo, beat_times = estimate_beats(envelopes, envelope_fps)
+    beat_times = beat_times[beat_frames_at(beat_times, fps, len(per_frame), keep=True)]
     beat_frames = beat_frames_at(beat_times, fps, len(per_frame))
-    beat_times = beat_times[(np.round(beat_times * fps) >= 0) & (np.round(beat_times * fps) < len(per_frame))]
     peak_frames = onset_peaks(onset, fps)
     one_hots = np.zeros((len(per_frame), 2), np.float32)
     one_hots[peak_frames, 0] = 1.0
