@@ -51,7 +51,11 @@ def render(project: Path, out: Path) -> Path:
         command = ["lmms", "--render", str(project), "--format", "wav", "--output", str(partial)]
         if os.geteuid() == 0:
             command.insert(1, "--allowroot")
-        subprocess.run(command, check=True, capture_output=True, timeout=600)
+        for attempt in range(3):  # LMMS 1.2 now and then crashes while it starts headless
+            if subprocess.run(command, capture_output=True, timeout=600).returncode == 0:
+                break
+        else:
+            raise RuntimeError(f"LMMS failed three times to render {project}")
         partial.replace(out)
     return out
 

@@ -9,4 +9,13 @@ __version__ = "0.1.0"
 
 from .errors import ChoreoError  # noqa: E402
 
-__all__ = ["ChoreoError", "__version__"]
+__all__ = ["ChoreoError", "__version__", "dance"]
+
+
+def __getattr__(name: str):
+    """``choreo.dance`` without importing torch or librosa until it is used."""
+    if name == "dance":
+        from .pipeline import dance
+
+        return dance
+    raise AttributeError(f"module 'choreo' has no attribute {name!r}")

@@ -249,26 +249,9 @@ def sampling_flags(generator: str, steps: int | None, guidance: float | None, sa
 
 
 def load_backend(settings: Settings, **factory_options):
-    from ..errors import ChoreoError, ParameterError
-    from ..generator import available_plugins
+    from ..pipeline import load_backend as load
 
-    plugin = available_plugins().get(settings.generator)
-    if plugin is None or plugin.factory is None:
-        raise ParameterError(f"generator {settings.generator!r} is not available (see choreo generators)")
-    checkpoint = settings.checkpoint
-    if checkpoint is None:
-        checkpoint = plugin.default_checkpoint
-        if checkpoint is None or not Path(checkpoint).is_file():
-            raise ChoreoError(f"{settings.generator} has no bundled checkpoint; pass --checkpoint")
-    return plugin.factory(checkpoint, **factory_options)
-
-
-def finish(motion, music, constraints, settings: Settings):
-    """The finishing passes every dance goes through: beat lock, then foot lock (choreo.finishing)."""
-    from ..finishing import finish as finish_motion
-
-    fixed = None if constraints is None else constraints.fixed_frames()
-    return finish_motion(motion, music.beat_frames, fixed, beat=settings.beat_lock, foot=settings.foot_lock)
+    return load(settings.generator, settings.checkpoint, **factory_options)
 
 
 def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
@@ -276,8 +259,8 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     from ..errors import ParameterError
     from ..fileio import output_target
     from ..formats import check_output_format, write_motions
-    from ..generator import GenerationRequest
     from ..music import Music
+    from ..pipeline import Finishing, dance
 
     if output.count("-") > 1 or (len(output) > 1 and settings.format):
         raise ParameterError("with several outputs, name each by its extension (and at most one '-')")
@@ -290,11 +273,11 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     constraints = build_constraints(music) if build_constraints else None
     options = {"guidance": settings.guidance, "sampler": settings.sampler}
     options |= {} if settings.steps is None else {"steps": settings.steps}
-    request = GenerationRequest(music, style=settings.style, seed=settings.seed, options=options, constraints=constraints)
     started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
-        motion = backend.generate(request, progress=lambda fraction: update(round(fraction * 100), 100))
-    motion = finish(motion, music, constraints, settings)
+        motion = dance(music, backend, style=settings.style, seed=settings.seed, options=options, constraints=constraints,
+                       finishing=Finishing(settings.beat_lock, settings.foot_lock),
+                       progress=lambda fraction: update(round(fraction * 100), 100))
     seconds = time.perf_counter() - started
     meta = motion.metadata
     if meta.get("style_notice"):

@@ -1,0 +1,89 @@
+"""A song in, a finished dance out: the pipeline every command, script and benchmark shares.
+
+    import choreo
+    motion = choreo.dance("song.mp3", style="waltz", seed=3)
+    motion = choreo.dance("song.mp3", generator="graph", options={"top_k": 128})
+
+Steps: analyse the song (or take a :class:`~choreo.music.Music`), build the constraints against
+its frames, let the backend dance, then the finishing passes (beat lock on, foot lock off, as
+measured in docs/results.md). Writing files is the caller's business (``choreo.formats``).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Union
+
+if TYPE_CHECKING:
+    from .constraints import Constraints
+    from .generator import Generator
+    from .motion import Motion
+    from .music import Music
+
+ConstraintsFor = Callable[["Music"], "Constraints | None"]  # built once the song's frames are known
+
+
+@dataclass(frozen=True)
+class Finishing:
+    """The passes every dance goes through after its backend (choreo.finishing)."""
+
+    beat_lock: bool = True  # motion beats re-timed onto the music's beats (given frames stay)
+    foot_lock: bool = False  # planted feet's drift moved onto the root (halves PFC, doubles FID_g)
+
+
+_BACKENDS: dict[tuple, "Generator"] = {}
+
+
+def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options) -> "Generator":
+    """The backend ``name`` loaded from ``checkpoint`` (default: its bundled one), kept for reuse:
+    a script dancing many songs loads the weights once."""
+    from .errors import ChoreoError, ParameterError
+    from .generator import available_plugins
+
+    key = (name, None if checkpoint is None else str(checkpoint), tuple(sorted((k, str(v)) for k, v in factory_options.items())))
+    if key in _BACKENDS:
+        return _BACKENDS[key]
+    plugin = available_plugins().get(name)
+    if plugin is None or plugin.factory is None:
+        raise ParameterError(f"generator {name!r} is not available (see choreo generators)")
+    if checkpoint is None:
+        checkpoint = plugin.default_checkpoint
+        if checkpoint is None or not Path(checkpoint).is_file():
+            raise ChoreoError(f"{name} has no bundled checkpoint; pass a checkpoint")
+    _BACKENDS[key] = plugin.factory(checkpoint, **factory_options)
+    return _BACKENDS[key]
+
+
+def dance(
+    song: Union[str, os.PathLike, "Music"],
+    generator: Union[str, "Generator"] = "sgmd",
+    *,
+    style: str | None = None,
+    seed: int = 0,
+    options: dict[str, Any] | None = None,
+    constraints: Union["Constraints", ConstraintsFor, None] = None,
+    checkpoint: str | os.PathLike | None = None,
+    finishing: Finishing = Finishing(),
+    analysis_progress: Callable[[float, float], None] | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> "Motion":
+    """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
+
+    ``generator`` is a backend name (see `choreo generators`) or a loaded backend; ``options``
+    are that backend's own (sgmd: steps, guidance, sampler; graph: top_k, ...); ``constraints``
+    (or a function building them from the analysed music) fix frames, joints or a root path.
+    ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps.
+    """
+    from .finishing import finish
+    from .generator import GenerationRequest
+    from .music import Music
+
+    backend = load_backend(generator, checkpoint) if isinstance(generator, str) else generator
+    music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress)
+    fixed = constraints(music) if callable(constraints) else constraints
+    request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
+    motion = backend.generate(request, progress=progress)
+    frames = None if fixed is None else fixed.fixed_frames()
+    return finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock)

@@ -1,0 +1,68 @@
+"""choreo.dance(): the library entry point the CLI, scripts and benchmarks share."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import choreo
+from choreo.constraints import Constraints
+from choreo.music import Music
+from choreo.pipeline import Finishing, load_backend
+
+SONG = Path(__file__).parents[1] / "examples" / "drum_and_bass_174bpm.wav"
+
+
+@pytest.fixture(scope="module")
+def music():
+    return Music.from_file(SONG, end=6.0)
+
+
+def test_dance_returns_the_song_long_dance_and_seeds_decide_it(music, tiny_checkpoint):
+    first = choreo.dance(music, checkpoint=tiny_checkpoint, seed=1)
+    assert first.num_frames == music.num_frames and first.fps == music.fps
+    again = choreo.dance(music, checkpoint=tiny_checkpoint, seed=1)
+    other = choreo.dance(music, checkpoint=tiny_checkpoint, seed=2)
+    np.testing.assert_array_equal(first.rotations, again.rotations)
+    assert not np.allclose(first.rotations, other.rotations)
+
+
+def test_dance_takes_a_file_and_the_same_options_as_the_cli(tiny_checkpoint, tmp_path):
+    from choreo.cli import main
+    from choreo.formats import read_motion
+
+    assert main(["generate", str(SONG), "-o", str(tmp_path / "d.npz"), "--checkpoint", str(tiny_checkpoint),
+                 "--seed", "4", "--steps", "3", "--guidance", "1.5", "--no-beat-lock"]) == 0
+    written = read_motion(tmp_path / "d.npz")
+    danced = choreo.dance(SONG, checkpoint=tiny_checkpoint, seed=4, options={"steps": 3, "guidance": 1.5},
+                          finishing=Finishing(beat_lock=False))
+    np.testing.assert_allclose(danced.joint_positions(), written.joint_positions(), atol=1e-5)
+
+
+def test_constraints_built_from_the_music_are_kept(music, tiny_checkpoint):
+    pose = choreo.dance(music, checkpoint=tiny_checkpoint, seed=0).slice_frames(0, 1)
+
+    def opening(m):
+        return Constraints.none(m.num_frames, m.fps).fix_motion(pose, at=30)
+
+    danced = choreo.dance(music, checkpoint=tiny_checkpoint, seed=9, constraints=opening)
+    np.testing.assert_allclose(danced.joint_positions()[30], pose.joint_positions()[0], atol=1e-4)
+
+
+def test_backends_are_loaded_once_per_checkpoint(tiny_checkpoint):
+    assert load_backend("sgmd", tiny_checkpoint) is load_backend("sgmd", tiny_checkpoint)
+
+
+def test_unknown_backend_is_a_parameter_error(music):
+    from choreo.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="not available"):
+        choreo.dance(music, "no-such-backend")
+
+
+def test_importing_choreo_does_not_import_torch_or_librosa():
+    code = "import sys, choreo; choreo.dance; print('torch' in sys.modules, 'librosa' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["False", "False"]
