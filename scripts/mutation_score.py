@@ -48,16 +48,20 @@ AREAS: dict[str, Area] = {
     "constraints": Area(("src/choreo/constraints/*",), ("tests/test_constraints.py",),
                         skip="not ddpm and not preview"),  # 100 s and 20 s; the ddim case and the CLI stay
     "motion": Area(("src/choreo/motion/*",),
-                   ("tests/test_motion.py", "tests/test_augment.py", "tests/test_skeleton.py")),
+                   ("tests/test_motion.py", "tests/test_augment.py", "tests/test_skeleton.py", "tests/test_metric_values.py",
+                    "tests/test_metric_edges.py", "tests/test_sgmd_controls.py", "tests/test_graph.py"),
+                   skip="not training and not cli and not checkpoints"),
     "formats": Area(("src/choreo/formats/*",),
                     ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py"),
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
     "finishing": Area(("src/choreo/finishing/*",),
                       ("tests/test_beat_lock.py", "tests/test_foot_lock.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
-                          ("tests/test_sgmd_controls.py", "tests/test_sgmd.py"), plugin="choreo_sgmd"),
+                          ("tests/test_sgmd_controls.py", "tests/test_sgmd.py"), plugin="choreo_sgmd",
+                          skip="not training and not free_text and not batch and not generate_ and not inference"),
     "graph": Area(("src/choreo_graph/graph.py", "src/choreo_graph/warp.py", "src/choreo_graph/tempo.py"),
-                  ("tests/test_graph_costs.py", "tests/test_graph.py"), plugin="choreo_graph"),
+                  ("tests/test_graph_costs.py", "tests/test_graph.py"), plugin="choreo_graph",
+                  skip="not training and not cli"),
 }
 
 

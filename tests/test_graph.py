@@ -80,6 +80,20 @@ def test_warp_finds_a_planted_subsequence():
     assert abs(frames[0] - 80) <= 1 and abs(frames[-1] - 199) <= 1
 
 
+
+def test_smoothed_warp_changes_speed_gradually_and_keeps_its_course():
+    rng = np.random.default_rng(5)
+    queries, references = rng.random((32, 120)), rng.random((32, 240))
+    raw = warp_frames(queries, references, stride=2)
+    smooth = warp_frames(queries, references, stride=2, smoothing=4.0)
+    assert (np.diff(smooth, axis=1) >= -1e-9).all() and (smooth >= 0).all() and (smooth <= 239).all()
+    jolt = lambda frames: np.abs(np.diff(frames, 2, axis=1)).max(axis=1)  # noqa: E731 - speed change per frame
+    assert (jolt(smooth) < 0.5 * jolt(raw)).all()
+    assert np.abs(smooth - raw)[:, 12:-12].max() < 6.0  # the same course, minus the corners
+    kernel = np.exp(-0.5 * (np.arange(-16, 17) / 4.0) ** 2)
+    literal = np.convolve(raw[0], kernel / kernel.sum(), mode="same")[20:-20]
+    np.testing.assert_allclose(smooth[0, 20:-20], literal, atol=1e-6)
+
 def test_random_time_warp_keeps_ends_and_content():
     positions = local_positions(swaying_dance(8.0).joint_positions())
     warped = random_time_warp(positions, 6, np.random.default_rng(0))

@@ -81,7 +81,7 @@ class ChoreoGraphGenerator(Generator):
     def dance(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
               progress: Callable[[float], None] = lambda fraction: None) -> Motion:
         """The whole pipeline on a (T, n_mels) log-mel: T frames of motion."""
-        motion = assemble(self.walk(mel, config, allowed, progress), self.repertoire, config.blend_frames)
+        motion = assemble(self.walk(mel, config, allowed, progress), self.repertoire, config.blend_frames, config.foot_seams)
         progress(1.0)
         return motion.slice_frames(0, len(mel))
 

@@ -16,7 +16,7 @@ import torch
 
 from choreo.metrics.beats import motion_beats
 from choreo.motion import Motion
-from choreo.motion.stitch import crossfade, facing_yaw, placement_onto, turned_and_moved
+from choreo.motion.stitch import crossfade, facing_yaw, placement_onto, planted_foot_shift, turned_and_moved
 
 from .config import NODE_FRAMES, WINDOW_FRAMES, GraphConfig, StyleConfig
 from .model import ChoreoGraphModel
@@ -86,7 +86,7 @@ def warp_candidates(windows: MusicWindows, candidates: np.ndarray, repertoire: R
         return np.broadcast_to(np.arange(MIDDLE.start, MIDDLE.stop, dtype=np.float64), (n, k, WINDOW_FRAMES))
     queries = np.repeat(windows.tempo, k, axis=0)
     references = repertoire.tempo[candidates.reshape(-1)]
-    frames = np.concatenate([warp_frames(queries[i : i + WARP_CHUNK], references[i : i + WARP_CHUNK], config.dtw_stride)
+    frames = np.concatenate([warp_frames(queries[i : i + WARP_CHUNK], references[i : i + WARP_CHUNK], config.dtw_stride, config.warp_smoothing)
                              for i in range(0, len(queries), WARP_CHUNK)])
     return frames.reshape(n, k, WINDOW_FRAMES)
 
@@ -199,7 +199,7 @@ def replayed_nodes(path: list[Node], repertoire: Repertoire, memory: int) -> int
     return sum(bool(replaying(spans[i : i + 1], spans[max(0, i - memory) : i])[0]) for i in range(1, len(path)))
 
 
-def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Motion:
+def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int, foot_seams: bool = False) -> Motion:
     """Play the chosen nodes end to end: a segment runs on unbroken; a jump to another segment is
     placed where the previous one would have gone next and cross-faded into it."""
     clips: dict[int, Motion] = {}
@@ -224,6 +224,9 @@ def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Mot
             ahead = turned_and_moved(ahead, *placement)
             target = ahead.slice_frames(0, 1)
             placement = placement_onto(piece, target.root_positions[0], float(facing_yaw(target.joint_positions()[0])))
+            if foot_seams:
+                placement = (placement[0], placement[1] + planted_foot_shift(ahead, turned_and_moved(piece, *placement),
+                                                                             blend_frames))
             piece = crossfade(ahead, turned_and_moved(piece, *placement))
         pieces.append(piece)
         previous = node

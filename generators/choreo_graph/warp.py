@@ -12,6 +12,7 @@ operations, because the graph warps K candidates for every second of the song.
 from __future__ import annotations
 
 import numpy as np
+import scipy.ndimage
 
 STEPS = np.array([[1, 1], [1, 2], [2, 1]])  # (query, reference) advances; slope in [0.5, 2]
 
@@ -70,10 +71,15 @@ def _backtrack(end: np.ndarray, step: np.ndarray, n: int) -> np.ndarray:
     return matched
 
 
-def warp_frames(query_curves: np.ndarray, reference_curves: np.ndarray, stride: int = 1) -> np.ndarray:
+def warp_frames(query_curves: np.ndarray, reference_curves: np.ndarray, stride: int = 1,
+                smoothing: float = 0.0) -> np.ndarray:
     """(B, Tq) fractional reference frames that re-time each reference piece onto its query.
 
     ``stride`` > 1 matches every stride-th frame (cheaper by stride^2) and interpolates between.
+    ``smoothing`` > 0: the warp is Gaussian-smoothed (sigma in frames). A DTW path changes speed
+    between 0.5x and 2x from one step to the next; played as it is, every change is a jolt of
+    the whole body, and feet that were still in the clip slide. A smoothed non-decreasing warp
+    stays non-decreasing.
     """
     queries, references = query_curves[:, ::stride], reference_curves[:, ::stride]
     matched = subsequence_dtw(queries, references) * stride  # (B, Nc) at query frames 0, s, 2s...
@@ -82,4 +88,7 @@ def warp_frames(query_curves: np.ndarray, reference_curves: np.ndarray, stride: 
     upper = np.minimum(lower + 1, matched.shape[1] - 1)
     frac = position - lower
     slope = np.where(upper > lower, matched[:, upper] - matched[:, lower], stride)  # past the last: play on at 1x
-    return np.clip(matched[:, lower] + frac * slope, 0, reference_curves.shape[1] - 1)
+    frames = matched[:, lower] + frac * slope
+    if smoothing > 0:
+        frames = scipy.ndimage.gaussian_filter1d(frames, smoothing, axis=1, mode="nearest")
+    return np.clip(frames, 0, reference_curves.shape[1] - 1)
