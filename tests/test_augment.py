@@ -89,3 +89,17 @@ def test_stretched_features_keep_beats_on_the_stretched_beats():
     np.testing.assert_allclose(fast[:10, 0], np.arange(10) * 1.2, rtol=1e-6)
     assert np.flatnonzero(fast[:, BEAT_COLUMN]).tolist() == [0, 25, 50, 75]
     assert np.flatnonzero(fast[:, PEAK_COLUMN]).tolist() == [38]  # 45 / 1.2 = 37.5 -> 38
+
+
+def test_mirroring_marks_the_dance_and_keeps_what_else_it_knew():
+    dance = Motion.rest(4).replace(metadata={"genre": "waltz"})
+    once = mirrored(dance)
+    assert once.metadata == {"genre": "waltz", "mirrored": True}
+    assert mirrored(once).metadata == {"genre": "waltz", "mirrored": False}
+
+
+def test_a_joint_without_a_twin_is_named_in_the_error():
+    from choreo.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="joint 'l_hand' has no mirror twin 'r_hand'"):
+        mirror_joint_order(("pelvis", "l_hand"))

@@ -89,3 +89,22 @@ def test_frame_vector_requires_smpl24():
     motion = Motion(np.zeros((2, 3)), np.tile([1.0, 0, 0, 0], (2, 2, 1)), skeleton=small)
     with pytest.raises(ParameterError):
         motion_to_vector(motion)
+
+
+def test_rest_is_the_identity_pose_over_the_origin_at_the_asked_rate():
+    from choreo.skeleton import SMPL24
+
+    rest = Motion.rest(5, fps=24.0, root_height=0.9)
+    np.testing.assert_array_equal(rest.rotations, np.tile([1.0, 0.0, 0.0, 0.0], (5, 24, 1)))
+    np.testing.assert_array_equal(rest.root_positions, np.tile([0.0, 0.9, 0.0], (5, 1)))
+    assert rest.fps == 24.0 and rest.skeleton is SMPL24
+    np.testing.assert_allclose(rest.joint_positions()[0], SMPL24.rest_positions() + [0.0, 0.9, 0.0], atol=1e-12)
+
+
+def test_rest_of_another_skeleton_stands_on_the_floor():
+    from choreo.skeleton import Skeleton
+
+    small = Skeleton(("hips", "foot"), (-1, 0), np.array([[0.0, 0.0, 0.0], [0.0, -0.8, 0.0]]))
+    rest = Motion.rest(3, skeleton=small)
+    assert rest.skeleton is small and rest.rotations.shape == (3, 2, 4)
+    np.testing.assert_allclose(rest.joint_positions()[:, :, 1], [[0.8, 0.0]] * 3)
