@@ -255,3 +255,29 @@ def test_cli_graph_and_build(tiny_graph, tmp_path, capsys):
     code = main(["graph", str(SONG), "-o", str(bad), "--checkpoint", str(checkpoint), "--repertoire", str(tmp_path / "missing.npz")])
     err = capsys.readouterr().err
     assert code == 2 and not bad.exists() and "does not exist" in err and "Traceback" not in err
+
+
+def test_seeds_give_other_takes_and_the_dance_lists_its_clips(tiny_graph):
+    from choreo.finishing import beat_lock
+
+    generator = ChoreoGraphGenerator.from_files(*tiny_graph)
+    music = Music.from_file(SONG, end=8.0)
+    take = lambda seed: generator.generate(GenerationRequest(music, seed=seed, options={"top_k": 4}))  # noqa: E731
+    paper, again, other = take(0), take(0), take(7)
+    np.testing.assert_array_equal(paper.rotations, again.rotations)
+    assert not np.allclose(paper.rotations, other.rotations)
+    np.testing.assert_array_equal(take(7).rotations, other.rotations)
+    clips = paper.metadata["clips"]
+    assert clips[0]["output_frames"][0] == 0 and clips[-1]["output_frames"][1] >= music.num_frames - 1
+    for before, after in zip(clips, clips[1:]):
+        assert after["output_frames"][0] == before["output_frames"][1] + 1  # one after another, no gap
+    assert all(c["source"] in ("sway", "fast") and c["clip"].startswith(c["source"] + "@") for c in clips)
+    first = clips[0]
+    source = generator.repertoire.clip_motion(generator.repertoire.names.tolist().index(first["clip"]))
+    start = int(first["clip"].rpartition("@")[2])
+    # the dance opens on the listed source frame (joint rotations; the root is placed and turned)
+    opening = source.sample_frames(np.array([first["source_frames"][0] - start]))
+    np.testing.assert_allclose(np.abs(np.sum(paper.rotations[0, 1:] * opening.rotations[0, 1:], -1)), 1.0, atol=1e-3)
+    locked = beat_lock(paper, np.arange(0, music.num_frames, 12)).motion
+    retimed = locked.metadata["clips"]
+    assert retimed[0]["output_frames"][0] == 0 and retimed[-1]["output_frames"][1] == music.num_frames - 1

@@ -15,7 +15,7 @@ from choreo.motion import Motion
 from choreo.music.mel import music_log_mel
 
 from .config import NODE_FRAMES, GraphConfig
-from .graph import DynamicGraph, Node, assemble, music_windows, select_candidates, warp_candidates
+from .graph import DynamicGraph, Node, assemble, music_windows, played_clips, select_candidates, warp_candidates
 from .model import ChoreoGraphModel, load_checkpoint
 from .repertoire import Repertoire
 
@@ -48,8 +48,8 @@ class ChoreoGraphGenerator(Generator):
         if unknown:
             raise ParameterError(f"unknown graph option(s): {', '.join(sorted(unknown))}")
         config = replace(self.config, **graph_options)
-        if config.top_k < 1 or config.blend_frames < 0 or config.dtw_stride < 1:
-            raise ParameterError("top_k and dtw_stride must be >= 1 and blend_frames >= 0")
+        if config.top_k < 1 or config.blend_frames < 0 or config.dtw_stride < 1 or config.take_variation < 0:
+            raise ParameterError("top_k and dtw_stride must be >= 1, blend_frames and take_variation >= 0")
         return config
 
     def allowed_clips(self, style: str | None) -> tuple[np.ndarray | None, str | None]:
@@ -70,30 +70,36 @@ class ChoreoGraphGenerator(Generator):
         allowed, genre = self.allowed_clips(request.style)
         report = progress or (lambda fraction: None)
         mel = music_log_mel(request.music)
-        motion = self.dance(mel, config, allowed, report)  # as many frames as the mel, i.e. the music
+        path = self.walk(mel, config, allowed, report, seed=request.seed or 0)
+        motion = self.assemble(path, mel, config)  # as many frames as the mel, i.e. the music
+        report(1.0)
         motion.metadata = {
             "generator": "graph", "checkpoint": self.checkpoint_name, "repertoire": self.repertoire_name,
             "style": request.style, "genre": genre, "seed": request.seed, "top_k": config.top_k,
             "dynamic_graph": config.dynamic, "retempo": config.retempo,
+            "clips": played_clips(path, self.repertoire),
         }  # fmt: skip
         return motion
 
     def dance(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
               progress: Callable[[float], None] = lambda fraction: None) -> Motion:
         """The whole pipeline on a (T, n_mels) log-mel: T frames of motion."""
-        motion = assemble(self.walk(mel, config, allowed, progress), self.repertoire, config.blend_frames, config.foot_seams)
+        motion = self.assemble(self.walk(mel, config, allowed, progress), mel, config)
         progress(1.0)
-        return motion.slice_frames(0, len(mel))
+        return motion
+
+    def assemble(self, path: list[Node], mel: np.ndarray, config: GraphConfig) -> Motion:
+        return assemble(path, self.repertoire, config.blend_frames, config.foot_seams).slice_frames(0, len(mel))
 
     def walk(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
-             progress: Callable[[float], None] = lambda fraction: None) -> list[Node]:
+             progress: Callable[[float], None] = lambda fraction: None, seed: int = 0) -> list[Node]:
         """The graph's path, one node per second of the (T, n_mels) log-mel.
 
         Seconds are processed in chunks (select, warp, then walk the graph through them), so only
         a chunk's candidates and warps are ever held, whatever the song's length.
         """
         seconds = max(1, math.ceil(len(mel) / NODE_FRAMES))
-        graph, path = DynamicGraph(self.repertoire, config), []
+        graph, path = DynamicGraph(self.repertoire, config, seed), []
         for first in range(0, seconds, CHUNK_SECONDS):
             chunk = range(first, min(seconds, first + CHUNK_SECONDS))
             windows = music_windows(self.model, mel, chunk)

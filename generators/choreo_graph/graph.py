@@ -111,8 +111,9 @@ class DynamicGraph:
     ranking every second, and whose end joins its own start, is replayed second after second
     (a 30 s rumba excerpt got one node 24 times in a row)."""
 
-    def __init__(self, repertoire: Repertoire, config: GraphConfig):
+    def __init__(self, repertoire: Repertoire, config: GraphConfig, seed: int = 0):
         self.repertoire, self.config = repertoire, config
+        self.rng = np.random.default_rng(seed) if seed and config.take_variation > 0 else None
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))
         self.current: Node | None = None
         self.played: deque[tuple[int, np.ndarray]] = deque()  # (second, source span of the node played)
@@ -149,6 +150,8 @@ class DynamicGraph:
                 cost += config.completeness_cost * completeness
         last = warps[np.arange(len(clips)), index * NODE_FRAMES + NODE_FRAMES - 1]
         cost += self.repeat_cost(t, source_spans(repertoire, clips, first, last))
+        if self.rng is not None:  # another take: near-equal choices fall another way
+            cost += config.take_variation * cost.std() * self.rng.standard_normal(len(cost))
         best = int(cost.argmin())
         start = int(index[best]) * NODE_FRAMES
         self.current = Node((int(segment_time[best]), int(rank[best])), int(index[best]), int(clips[best]),
@@ -183,13 +186,30 @@ def replaying(spans: np.ndarray, played: np.ndarray) -> np.ndarray:
 
 
 def search_graph(windows: MusicWindows, candidates: np.ndarray, warps: np.ndarray, repertoire: Repertoire,
-                 config: GraphConfig) -> list[Node]:
+                 config: GraphConfig, seed: int = 0) -> list[Node]:
     """The whole path at once, for songs already cut into windows (tests, short excerpts)."""
-    graph, path = DynamicGraph(repertoire, config), []
+    graph, path = DynamicGraph(repertoire, config, seed), []
     for t in range(len(candidates)):
         graph.insert(t, candidates[t], warps[t])
         path.append(graph.step(t, windows.style[t]))
     return path
+
+
+def played_clips(path: list[Node], repertoire: Repertoire) -> list[dict]:
+    """What a dance is made of, one entry per run of continuing nodes: the repertoire clip, the
+    frames of its source motion it plays (first, last; warped in between) and the output frames."""
+    sources, starts = repertoire.origins
+    names = [str(name).rpartition("@")[0] or str(name) for name in repertoire.names]
+    runs: list[dict] = []
+    for second, node in enumerate(path):
+        source = [round(float(starts[node.clip] + node.frames[0]), 2), round(float(starts[node.clip] + node.frames[-1]), 2)]
+        output = [second * NODE_FRAMES, (second + 1) * NODE_FRAMES - 1]
+        if runs and node.continues(path[second - 1]):
+            runs[-1]["source_frames"][1], runs[-1]["output_frames"][1] = source[1], output[1]
+        else:
+            runs.append({"clip": str(repertoire.names[node.clip]), "source": names[node.clip],
+                         "source_frames": source, "output_frames": output})
+    return runs
 
 
 def replayed_nodes(path: list[Node], repertoire: Repertoire, memory: int) -> int:

@@ -37,7 +37,7 @@ def graph_dance(
     top_k: int = typer.Option(512, "--top-k", "-k", help="Candidate clips per 4 s of music (the paper's K)."),
     motion_graph: bool = typer.Option(False, "--motion-graph", help="Ablation: a plain motion graph (first node of each segment only)."),
     no_retempo: bool = typer.Option(False, "--no-retempo", help="Ablation: use each clip's middle 4 s unwarped."),
-    seed: int = typer.Option(0, help="Recorded in the output; the graph search itself is deterministic."),
+    seed: int = typer.Option(0, help="0: the paper's deterministic walk; any other seed: another take of the same song."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,

@@ -67,7 +67,18 @@ def beat_lock(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray |
     warped.root_positions[fixed] = motion.root_positions[fixed]  # exactly as given, not re-interpolated
     warped.rotations[fixed] = motion.rotations[fixed]
     warped.metadata = dict(motion.metadata, beat_lock=f"{len(pairs)} of {len(dance_beats)} motion beats on music beats")
+    if isinstance(motion.metadata.get("clips"), list):  # a backend's timeline follows the re-timing
+        warped.metadata["clips"] = [dict(clip, output_frames=retimed_span(clip["output_frames"], source))
+                                    for clip in motion.metadata["clips"]]
     return BeatLockResult(warped, source, pairs, len(dance_beats))
+
+
+def retimed_span(frames: list[int], source: np.ndarray) -> list[int]:
+    """Where the frames [first, last] of a dance play after re-timing (``source[i]``: the frame
+    that output frame i shows; non-decreasing)."""
+    first = int(np.searchsorted(source, frames[0] - 0.5))
+    last = int(np.searchsorted(source, frames[1] + 0.5)) - 1
+    return [min(first, len(source) - 1), max(min(last, len(source) - 1), first)]
 
 
 def free_spans(fixed: np.ndarray) -> list[tuple[int, int]]:
