@@ -90,3 +90,16 @@ def test_bad_settings_are_refused():
         BeatLockConfig(min_speed=1.2)
     with pytest.raises(ParameterError):
         beat_lock(swinging_dance(np.array([20]), 60), np.array([20]), np.zeros(10, bool))
+
+
+def test_retimed_spans_follow_the_warp():
+    from choreo.finishing.beat_lock import retimed_span
+
+    identity = np.arange(100.0)
+    assert retimed_span([10, 29], identity) == [10, 29]
+    slower = np.arange(200) / 2.0  # half speed: output frame i shows frame i / 2
+    assert retimed_span([10, 29], slower) == [19, 58]  # 9.5 rounds up into the span, 29.5 out of it
+    assert retimed_span([0, 9], slower)[1] == 18  # the span before ends where this one starts
+    faster = np.minimum(np.arange(50) * 2.0, 99)  # twice as fast: 10..29 over 5..14
+    assert retimed_span([10, 29], faster) == [5, 14]
+    assert retimed_span([90, 99], faster) == [45, 49]
