@@ -66,3 +66,25 @@ def test_importing_choreo_does_not_import_torch_or_librosa():
     code = "import sys, choreo; choreo.dance; print('torch' in sys.modules, 'librosa' in sys.modules)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.split() == ["False", "False"]
+
+
+def test_options_a_backend_lacks_are_refused_before_the_song_is_read(tiny_checkpoint, tmp_path):
+    from choreo.errors import ParameterError
+
+    missing = tmp_path / "not-read.wav"  # never opened: the refusal comes first
+    with pytest.raises(ParameterError, match=r"^sgmd has no option top_k \(its options: .*guidance.*\)$"):
+        choreo.dance(missing, checkpoint=tiny_checkpoint, options={"top_k": 3})
+    with pytest.raises(ParameterError, match="unknown sampler 'euler'"):
+        choreo.dance(missing, checkpoint=tiny_checkpoint, options={"sampler": "euler"})
+
+
+def test_cli_refuses_constraints_for_the_graph_before_any_work(tmp_path, capsys, monkeypatch):
+    from choreo.cli import main
+
+    def analysed(*args, **kwargs):
+        raise AssertionError("the song was analysed before the refusal")
+
+    monkeypatch.setattr(Music, "from_file", analysed)
+    code = main(["inbetween", str(SONG), "--start", "x.bvh", "-o", str(tmp_path / "o.bvh"), "--generator", "graph"])
+    err = capsys.readouterr().err
+    assert code == 2 and "the graph backend does not take constraints" in err and not any(tmp_path.iterdir())

@@ -11,6 +11,8 @@ from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
 
+from .config import GraphConfig
+
 WEIGHTS = Path(__file__).parent / "weights"
 DEFAULT_CHECKPOINT = WEIGHTS / "graph-m2d.pt"
 DEFAULT_REPERTOIRE = WEIGHTS / "repertoire-sgmd.npz"
@@ -82,4 +84,5 @@ plugin = GeneratorPlugin(
     factory=build_generator,
     train=train_from_dataset,
     default_checkpoint=DEFAULT_CHECKPOINT,
+    options=GraphConfig,
 )

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
@@ -11,6 +10,7 @@ import numpy as np
 
 from choreo.errors import ParameterError
 from choreo.generator import GenerationRequest, Generator
+from choreo.generator.options import parse_options
 from choreo.motion import Motion
 from choreo.music.mel import music_log_mel
 
@@ -20,7 +20,6 @@ from .model import ChoreoGraphModel, load_checkpoint
 from .repertoire import Repertoire
 
 CHUNK_SECONDS = 32  # seconds of the song selected and warped at once (bounds memory)
-GENERIC_OPTIONS = {"guidance", "sampler", "steps"}  # the diffusion commands' options: meaningless here
 
 
 class ChoreoGraphGenerator(Generator):
@@ -43,11 +42,7 @@ class ChoreoGraphGenerator(Generator):
         return cls(model, Repertoire.load(repertoire), config, (Path(checkpoint).name, repertoire.name))
 
     def options(self, request: GenerationRequest) -> GraphConfig:
-        graph_options = {k: v for k, v in request.options.items() if k not in GENERIC_OPTIONS}
-        unknown = set(graph_options) - set(GraphConfig.__dataclass_fields__)
-        if unknown:
-            raise ParameterError(f"unknown graph option(s): {', '.join(sorted(unknown))}")
-        config = replace(self.config, **graph_options)
+        config = parse_options("graph", GraphConfig, request.options, base=self.config)
         if config.top_k < 1 or config.blend_frames < 0 or config.dtw_stride < 1 or config.take_variation < 0:
             raise ParameterError("top_k and dtw_stride must be >= 1, blend_frames and take_variation >= 0")
         return config

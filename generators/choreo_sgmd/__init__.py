@@ -10,6 +10,8 @@ from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
 
+from .options import SamplingOptions
+
 
 def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = "cpu", resume: bool = False,
                        max_steps: int | None = None, prompt_kind: str = "description", batch_size: int | None = None,
@@ -65,4 +67,6 @@ plugin = GeneratorPlugin(
     factory=build_generator,
     train=train_from_dataset,
     default_checkpoint=DEFAULT_CHECKPOINT,
+    options=SamplingOptions,
+    constraints=True,
 )

@@ -11,6 +11,7 @@ import torch
 
 from choreo.constraints import Constraints, parse_style_schedule
 from choreo.errors import InputError, ParameterError
+from choreo.generator.options import parse_options
 from choreo.generator import GenerationRequest, Generator
 from choreo.motion import Motion, vector_to_motion
 
@@ -19,7 +20,8 @@ from .config import DiffusionConfig, ModelConfig
 from .data import MusicScaler, music_input
 from .model import Denoiser
 from .normalizer import Normalizer
-from .sampling import Inpainting, SamplingOptions, sample_long
+from .options import SamplingOptions
+from .sampling import Inpainting, sample_long
 from .schedule import NoiseSchedule
 from .style import Style, resolve_style
 
@@ -75,13 +77,9 @@ class SGMDGenerator(Generator):
         return self.music_scaler(torch.from_numpy(music_input(features, self.model_config.music_dim)).float())
 
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
-        options = SamplingOptions(**{k: v for k, v in request.options.items() if k in SamplingOptions.__dataclass_fields__})
+        options = parse_options("sgmd", SamplingOptions, request.options)
         if request.seed is not None:
             options = replace(options, seed=request.seed)
-        if options.guidance < 0 or options.steps < 1:
-            raise ParameterError("guidance must be >= 0 and steps >= 1")
-        if options.sampler not in ("ddim", "ddpm"):
-            raise ParameterError(f"unknown sampler {options.sampler!r} (use ddim or ddpm)")
         if options.sampler == "ddpm" and request.options.get("steps") is None:
             options = replace(options, steps=self.diffusion_config.timesteps)
 

@@ -18,19 +18,8 @@ from choreo.constraints.displacement import displace_to_constraints
 from choreo.motion.vector import ROOT_SLICE
 
 from .guidance import GuidedDenoiser
+from .options import SamplingOptions  # noqa: F401 (its home before options.py)
 from .schedule import NoiseSchedule, make_sampler
-
-
-@dataclass(frozen=True)
-class SamplingOptions:
-    steps: int = 10  # DDIM steps; docs/results.md has the quality-against-steps curve behind 10 (DDPM: 1000)
-    guidance: float = 2.0  # classifier-free guidance weight w on music (paper eq. 6)
-    sampler: str = "ddim"
-    eta: float = 1.0  # DDIM stochasticity: 1 as EDGE samples, 0 deterministic
-    seed: int = 0
-    chunk_windows: int = 32  # windows per network call
-    block_windows: int = 48  # windows denoised together (2 min of song); longer songs go block by block
-    resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
 
 
 def window_starts(num_frames: int, window: int) -> list[int]:

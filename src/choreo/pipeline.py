@@ -56,6 +56,22 @@ def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None
     return _BACKENDS[key]
 
 
+def check_request(backend: str, options: dict[str, Any], constrained: bool) -> None:
+    """Refuse, before any work, options the backend does not have and constraints it cannot keep."""
+    from .errors import ParameterError
+    from .generator import available_plugins
+    from .generator.options import parse_options
+
+    plugin = available_plugins().get(backend)
+    if plugin is None:
+        return  # a backend object built by hand: it checks its own request
+    if plugin.options is not None:
+        parse_options(backend, plugin.options, options)
+    if constrained and not plugin.constraints:
+        raise ParameterError(f"the {backend} backend does not take constraints (keys, seed motion, inpainting, a path);"
+                             " use sgmd")
+
+
 def dance(
     song: Union[str, os.PathLike, "Music"],
     generator: Union[str, "Generator"] = "sgmd",
@@ -81,6 +97,7 @@ def dance(
     from .music import Music
 
     backend = load_backend(generator, checkpoint) if isinstance(generator, str) else generator
+    check_request(backend.name, options or {}, constraints is not None)  # before the song is analysed
     music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress)
     fixed = constraints(music) if callable(constraints) else constraints
     request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)

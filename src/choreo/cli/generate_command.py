@@ -24,7 +24,6 @@ GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
 STEPS = typer.Option(None, help="Sampling steps (default: the backend's: 10 DDIM steps for sgmd, 1000 for ddpm).")
 GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the music (default 2; 1 = none).")
 SAMPLER = typer.Option(None, help="sgmd: ddim (default; fast, any number of steps) or ddpm (the full chain).")
-SAMPLING_DEFAULTS = {"guidance": 2.0, "sampler": "ddim"}  # sgmd's; other backends take none of these flags
 SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
 BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
@@ -93,7 +92,7 @@ def generate(
         opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
                         beat_lock, foot_lock)
     backend = load_backend(settings)
@@ -150,7 +149,7 @@ def inbetween(
             fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
         return fixed
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
                         foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
@@ -186,7 +185,7 @@ def inpaint(
             raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
         return fixed
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
                         foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
@@ -211,7 +210,7 @@ def trajectory(
         xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
         return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
                         foot_lock=foot_lock)
     dance_one(load_backend(settings), song, output, settings, constraints)
@@ -224,9 +223,9 @@ class Settings:
     style: str | None
     checkpoint: Path | None
     generator: str
-    steps: int | None
-    guidance: float
-    sampler: str
+    steps: int | None  # None: the backend's default (as for guidance and sampler)
+    guidance: float | None
+    sampler: str | None
     seed: int
     format: str | None
     preview: bool = False  # render an MP4 with the music beside the first output file
@@ -234,18 +233,30 @@ class Settings:
     foot_lock: bool = False  # finishing: planted feet's drift moved onto the root (measured: off)
 
 
-def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None) -> tuple[float, str]:
-    """(guidance, sampler) with sgmd's defaults; given to a backend that does not sample, a one-line
-    error naming the backend instead of a flag silently ignored."""
+def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None,
+                   constrained: bool = False) -> tuple:
+    """The sampling flags given (None: the backend's default), checked against the backend's own
+    options before any work: a flag it does not take, or constraints it cannot keep, are a
+    one-line error naming the backend."""
     from ..errors import ParameterError
+    from ..generator import available_plugins
+    from ..generator.options import option_names
 
-    if generator != "sgmd":
-        given = [flag for flag, value in (("--steps", steps), ("--guidance", guidance), ("--sampler", sampler))
-                 if value is not None]
-        if given:
-            raise ParameterError(f"{', '.join(given)} appl{'ies' if len(given) == 1 else 'y'} to sgmd, not to {generator}")
-    return (SAMPLING_DEFAULTS["guidance"] if guidance is None else guidance,
-            SAMPLING_DEFAULTS["sampler"] if sampler is None else sampler)
+    plugin = available_plugins().get(generator)
+    if plugin is None or plugin.factory is None:
+        raise ParameterError(f"generator {generator!r} is not available (see choreo generators)")
+    takes = option_names(plugin.options) if plugin.options else []
+    given = [flag for flag, value in (("steps", steps), ("guidance", guidance), ("sampler", sampler))
+             if value is not None and flag not in takes]
+    if given:
+        flags = ", ".join(f"--{flag}" for flag in given)
+        raise ParameterError(f"{flags} {'is not an option' if len(given) == 1 else 'are not options'} of {generator}"
+                             f" (its options: {', '.join(takes) or 'none'})")
+    if constrained:
+        from ..pipeline import check_request
+
+        check_request(generator, {}, constrained=True)
+    return guidance, sampler
 
 
 def load_backend(settings: Settings, **factory_options):
@@ -271,8 +282,8 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)))
     constraints = build_constraints(music) if build_constraints else None
-    options = {"guidance": settings.guidance, "sampler": settings.sampler}
-    options |= {} if settings.steps is None else {"steps": settings.steps}
+    given = {"steps": settings.steps, "guidance": settings.guidance, "sampler": settings.sampler}
+    options = {name: value for name, value in given.items() if value is not None}  # the rest: the backend's defaults
     started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
         motion = dance(music, backend, style=settings.style, seed=settings.seed, options=options, constraints=constraints,
@@ -293,7 +304,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         written.append(str(video))
     if written:
         kept = f", {100 * constraints.known_fraction():.0f} % of joint values given" if constraints else ""
-        how = (f"{meta.get('sampler')} {meta.get('steps')} steps, guidance {settings.guidance:g}, seed {settings.seed}"
+        how = (f"{meta.get('sampler')} {meta.get('steps')} steps, guidance {meta.get('guidance'):g}, seed {settings.seed}"
                if meta.get("sampler") else f"K = {meta.get('top_k')}, repertoire {meta.get('repertoire')}")
         stderr_console.print(
             f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at {motion.fps:g} fps "

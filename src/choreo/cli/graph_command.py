@@ -53,7 +53,7 @@ def graph_dance(
 
     if top_k < 1:
         raise ParameterError("--top-k must be at least 1")
-    settings = Settings(style, checkpoint, "graph", None, 1.0, "ddim", seed, format, preview, beat_lock, foot_lock)
+    settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo)
     dance_one(backend, song, output, settings)
 

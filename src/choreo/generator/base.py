@@ -60,3 +60,5 @@ class GeneratorPlugin:
     factory: Callable[..., Generator] | None = None  # builds a Generator (e.g. from a checkpoint)
     train: Callable[..., object] | None = None  # train(data_dir, out_dir, **options), for `choreo train NAME`
     default_checkpoint: Path | None = None  # shipped weights used when the user names none
+    options: type | None = None  # dataclass of its generation options: flags are checked against it before any work
+    constraints: bool = False  # whether it dances under constraints (keys, seed motion, inpainting, a root path)
