@@ -35,11 +35,11 @@ STATUSES = ("killed", "survived", "timeout", "no tests", "suspicious", "skipped"
 class Area:
     files: tuple[str, ...]  # globs of the files mutated, as they lie under src/ in the clone
     tests: tuple[str, ...]  # the test files that guard them
-    plugin: str | None = None  # a generators/ package, moved under src/ in the clone first
     skip: str = ""  # a pytest -k expression leaving out tests too slow to run once per mutant
 
-# mutmut 3 imports mutated code from mutants/src only, so a backend package is moved there (in the
-# clone) and shadows the installed one.
+# mutmut 3 imports mutated code from mutants/src only: the backend packages are moved there (in the
+# clone), where they shadow the installed ones (which point at the live checkout).
+PLUGINS = ("choreo_sgmd", "choreo_graph")
 
 
 AREAS: dict[str, Area] = {
@@ -57,10 +57,10 @@ AREAS: dict[str, Area] = {
     "finishing": Area(("src/choreo/finishing/*",),
                       ("tests/test_beat_lock.py", "tests/test_foot_lock.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
-                          ("tests/test_sgmd_controls.py", "tests/test_sgmd.py"), plugin="choreo_sgmd",
+                          ("tests/test_sgmd_controls.py", "tests/test_sgmd.py"),
                           skip="not training and not free_text and not batch and not generate_ and not inference"),
     "graph": Area(("src/choreo_graph/graph.py", "src/choreo_graph/warp.py", "src/choreo_graph/tempo.py"),
-                  ("tests/test_graph_costs.py", "tests/test_graph.py"), plugin="choreo_graph",
+                  ("tests/test_graph_costs.py", "tests/test_graph.py"),
                   skip="not training and not cli"),
 }
 
@@ -68,8 +68,8 @@ AREAS: dict[str, Area] = {
 def configure(clone: Path, area: Area) -> None:
     """Append the area's mutmut settings to the clone's pyproject.toml."""
     quoted = lambda items: "[" + ", ".join(json.dumps(i) for i in items) + "]"  # noqa: E731
-    if area.plugin:
-        subprocess.run(["git", "mv", f"generators/{area.plugin}", f"src/{area.plugin}"], cwd=clone, check=True)
+    for plugin in PLUGINS:  # every package from the clone's commit, none from the live checkout
+        subprocess.run(["git", "mv", f"generators/{plugin}", f"src/{plugin}"], cwd=clone, check=True)
     with open(clone / "pyproject.toml", "a") as f:
         f.write("\n[tool.mutmut]\n")
         f.write('source_paths = ["src"]\n')
