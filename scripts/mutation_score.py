@@ -52,7 +52,7 @@ AREAS: dict[str, Area] = {
                     "tests/test_metric_edges.py", "tests/test_sgmd_controls.py", "tests/test_graph.py"),
                    skip="not training and not cli and not checkpoints"),
     "formats": Area(("src/choreo/formats/*",),
-                    ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py"),
+                    ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py", "tests/test_format_edges.py"),
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
     "finishing": Area(("src/choreo/finishing/*",),
                       ("tests/test_beat_lock.py", "tests/test_foot_lock.py")),
