@@ -57,9 +57,8 @@ class GraphConfig:
     completeness_scale: float = 5.0  # frames: the sigmoid's width in eq. 6
     dtw_stride: int = 2  # warp on every 2nd frame (15 fps), then interpolate the path
     blend_frames: int = 6  # cross-fade length where the graph jumps between segments
-    warp_smoothing: float = 0.0  # sigma (frames) of the Gaussian that smooths each DTW warp
+    warp_smoothing: float = 8.0  # sigma (frames) of the Gaussian that smooths each DTW warp (PFC 2.07 -> 1.00)
     take_variation: float = 0.1  # seeds other than 0: each second's costs get noise of this x their spread
-    foot_seams: bool = False  # place a jump's clip by the foot planted in both, not by the root
     repeat_cost: float = 100.0  # not in the paper: replaying source frames danced recently (see graph.py)
     repeat_memory: int = 30  # seconds a played node's source frames stay "recent"
     dynamic: bool = True  # False: the paper's Motion Graph ablation (first node of each segment only)

@@ -84,7 +84,7 @@ class ChoreoGraphGenerator(Generator):
         return motion
 
     def assemble(self, path: list[Node], mel: np.ndarray, config: GraphConfig) -> Motion:
-        return assemble(path, self.repertoire, config.blend_frames, config.foot_seams).slice_frames(0, len(mel))
+        return assemble(path, self.repertoire, config.blend_frames).slice_frames(0, len(mel))
 
     def walk(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
              progress: Callable[[float], None] = lambda fraction: None, seed: int = 0) -> list[Node]:

@@ -16,7 +16,7 @@ import torch
 
 from choreo.metrics.beats import motion_beats
 from choreo.motion import Motion
-from choreo.motion.stitch import crossfade, facing_yaw, placement_onto, planted_foot_shift, turned_and_moved
+from choreo.motion.stitch import crossfade, facing_yaw, placement_onto, turned_and_moved
 
 from .config import NODE_FRAMES, WINDOW_FRAMES, GraphConfig, StyleConfig
 from .model import ChoreoGraphModel
@@ -219,7 +219,7 @@ def replayed_nodes(path: list[Node], repertoire: Repertoire, memory: int) -> int
     return sum(bool(replaying(spans[i : i + 1], spans[max(0, i - memory) : i])[0]) for i in range(1, len(path)))
 
 
-def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int, foot_seams: bool = False) -> Motion:
+def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Motion:
     """Play the chosen nodes end to end: a segment runs on unbroken; a jump to another segment is
     placed where the previous one would have gone next and cross-faded into it."""
     clips: dict[int, Motion] = {}
@@ -244,9 +244,6 @@ def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int, foot_s
             ahead = turned_and_moved(ahead, *placement)
             target = ahead.slice_frames(0, 1)
             placement = placement_onto(piece, target.root_positions[0], float(facing_yaw(target.joint_positions()[0])))
-            if foot_seams:
-                placement = (placement[0], placement[1] + planted_foot_shift(ahead, turned_and_moved(piece, *placement),
-                                                                             blend_frames))
             piece = crossfade(ahead, turned_and_moved(piece, *placement))
         pieces.append(piece)
         previous = node

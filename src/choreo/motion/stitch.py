@@ -13,7 +13,6 @@ from ..skeleton import rotations as rot
 from .motion import Motion
 
 LEFT_HIP, RIGHT_HIP = 1, 2
-LEFT_ANKLE, RIGHT_ANKLE = 7, 8
 
 
 def facing_yaw(joint_positions: np.ndarray) -> np.ndarray:
@@ -68,22 +67,6 @@ def placement_onto(piece: Motion, target_root: np.ndarray, target_yaw: float) ->
     turned_root = rotate_about_y(piece.root_positions[0], angle)
     offset = np.array([target_root[0] - turned_root[0], 0.0, target_root[2] - turned_root[2]])
     return angle, offset
-
-
-def planted_foot_shift(outgoing: Motion, incoming: Motion, frames: int) -> np.ndarray:
-    """(3,) horizontal shift that puts ``incoming``'s planted foot where ``outgoing``'s is.
-
-    At a seam both pieces are blended for ``frames`` frames; a foot that stands still in both
-    but at two places would slide from one to the other during the blend. The foot (left or
-    right ankle) that moves least over those frames in both pieces is taken as the anchor: the
-    incoming piece is shifted so that its anchor starts where the outgoing one's stands.
-    """
-    ahead = outgoing.slice_frames(0, frames).joint_positions()
-    after = incoming.slice_frames(0, frames).joint_positions()
-    travel = lambda p, j: np.linalg.norm(np.diff(p[:, j, [0, 2]], axis=0), axis=-1).sum()  # noqa: E731
-    anchor = min((LEFT_ANKLE, RIGHT_ANKLE), key=lambda j: travel(ahead, j) + travel(after, j))
-    shift = ahead[0, anchor] - after[0, anchor]
-    return np.array([shift[0], 0.0, shift[2]])
 
 
 def crossfade(outgoing: Motion, incoming: Motion) -> Motion:
