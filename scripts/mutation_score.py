@@ -55,7 +55,7 @@ AREAS: dict[str, Area] = {
                     ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py", "tests/test_format_edges.py"),
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
     "finishing": Area(("src/choreo/finishing/*",),
-                      ("tests/test_beat_lock.py", "tests/test_foot_lock.py")),
+                      ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
                           ("tests/test_sgmd_controls.py", "tests/test_sgmd.py"),
                           skip="not training and not free_text and not batch and not generate_ and not inference"),

@@ -76,9 +76,10 @@ def beat_lock(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray |
 def retimed_span(frames: list[int], source: np.ndarray) -> list[int]:
     """Where the frames [first, last] of a dance play after re-timing (``source[i]``: the frame
     that output frame i shows; non-decreasing)."""
-    first = int(np.searchsorted(source, frames[0] - 0.5))
-    last = int(np.searchsorted(source, frames[1] + 0.5)) - 1
-    return [min(first, len(source) - 1), max(min(last, len(source) - 1), first)]
+    end = len(source) - 1
+    first = min(int(np.searchsorted(source, frames[0] - 0.5)), end)
+    last = min(int(np.searchsorted(source, frames[1] + 0.5)) - 1, end)
+    return [first, max(last, first)]
 
 
 def free_spans(fixed: np.ndarray) -> list[tuple[int, int]]:
