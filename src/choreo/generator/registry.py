@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from importlib import import_module
 from importlib.metadata import entry_points
 
 from ..errors import ChoreoError, ParameterError
 from .base import Generator, GeneratorPlugin
 
 ENTRY_POINT_GROUP = "choreo.generators"
+IN_TREE = {"sgmd": "choreo_sgmd", "graph": "choreo_graph"}  # found without entry points (a checkout run from PYTHONPATH)
 
 
 def available_plugins() -> dict[str, GeneratorPlugin]:
@@ -23,6 +25,12 @@ def available_plugins() -> dict[str, GeneratorPlugin]:
             plugin = GeneratorPlugin(entry.name, "(invalid plugin object)", ready=False,
                                      status=f"{entry.value} is not a GeneratorPlugin")
         plugins[entry.name] = plugin
+    for name, module in IN_TREE.items():
+        if name not in plugins:
+            try:
+                plugins[name] = import_module(module).plugin
+            except ImportError:
+                pass
     return dict(sorted(plugins.items()))
 
 
