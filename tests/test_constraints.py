@@ -277,3 +277,15 @@ def test_displacement_map_is_exact_at_given_values_and_smooth_around_them():
     assert np.abs(np.diff(moved[0], axis=0)).max() <= 1 / 15 + 1e-9  # no step anywhere
     assert moved[0, 35, 0] == 0 and moved[0, 65, 0] == 0 and moved[0, 45, 1] == 0
     np.testing.assert_array_equal(moved[0, :98, 2], 1.0)
+
+
+def test_a_huge_path_file_is_refused_before_it_is_read(tmp_path):
+    from choreo.constraints import read_root_path
+    from choreo.constraints.parse import MAX_PATH_BYTES
+    from choreo.errors import InputError
+
+    huge = tmp_path / "huge.csv"
+    with open(huge, "wb") as f:  # sparse: no disk used, but far too long to read
+        f.truncate(MAX_PATH_BYTES + 1)
+    with pytest.raises(InputError, match="is larger than 32 MiB"):
+        read_root_path(huge)

@@ -16,6 +16,7 @@ from ..skeleton import JOINT_NAMES, LOWER_BODY_JOINTS, UPPER_BODY_JOINTS
 JOINT_SETS = {"all": tuple(range(24)), "upper": UPPER_BODY_JOINTS, "lower": LOWER_BODY_JOINTS}
 PATH_SUFFIXES = (".csv", ".txt")
 MAX_PATH_VALUE = 1e4
+MAX_PATH_BYTES = 32 << 20  # about two million rows: a point a millisecond for half an hour
 
 
 def parse_frame_range(text: str, num_frames: int) -> slice:
@@ -126,6 +127,8 @@ def read_root_path(path: str | Path) -> tuple[np.ndarray | None, np.ndarray, np.
         return np.arange(motion.num_frames) / motion.fps, root[:, [0, 2]], root[:, 1]
     if not path.is_file():
         raise InputError(f"path file {path} does not exist")
+    if path.stat().st_size > MAX_PATH_BYTES:
+        raise InputError(f"path file {path} is larger than {MAX_PATH_BYTES >> 20} MiB: thin it out (a point per frame is plenty)")
     rows = [row for row in csv.reader(io.StringIO(path.read_text(errors="replace"))) if any(c.strip() for c in row)]
     if not rows:
         raise InputError(f"path file {path} is empty")
