@@ -73,6 +73,7 @@ def configure(clone: Path, area: Area) -> None:
     with open(clone / "pyproject.toml", "a") as f:
         f.write("\n[tool.mutmut]\n")
         f.write('source_paths = ["src"]\n')
+        f.write('also_copy = ["examples"]\n')  # tests read the example song from there
         f.write(f"only_mutate = {quoted(area.files)}\n")
         f.write(f"pytest_add_cli_args_test_selection = {quoted(area.tests)}\n")
         selection = ["-x", "-q", "-p", "no:cacheprovider", "-m", "not slow"] + (["-k", area.skip] if area.skip else [])
