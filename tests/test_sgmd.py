@@ -339,3 +339,22 @@ def test_long_songs_go_block_by_block_without_a_seam(tiny_generator):
     # every block after the first starts with frames that were already there: no jump where blocks meet
     jumps = (blocks[1:] - blocks[:-1]).abs().amax(-1)
     assert jumps.max() <= 3 * (one[1:] - one[:-1]).abs().amax(-1).max() + 1e-6
+
+
+@pytest.mark.parametrize("t", [1, 37, 500, 999])
+def test_ddpm_step_draws_from_the_closed_form_posterior(t):
+    """q(x_{t-1} | x_t, x0) from the schedule's own betas (Ho et al. 2020, eqs. 6-7), with the same
+    seeded noise: mean + sqrt(variance) * noise, x0 clipped to [-1, 1] first."""
+    schedule = NoiseSchedule()
+    sampler = make_sampler("ddpm", schedule, 1000)
+    ab = schedule.alphas_cumprod.double()
+    beta = 1 - ab[t] / ab[t - 1]  # beta_t of the cosine schedule, from consecutive alpha-bars
+    x0 = torch.linspace(-1.5, 1.5, 12, dtype=torch.float64).reshape(3, 4)  # partly outside [-1, 1]
+    sample = torch.linspace(2.0, -2.0, 12, dtype=torch.float64).reshape(3, 4)
+    out = sampler.step(x0, t, sample, generator=torch.Generator().manual_seed(5))
+    clipped = x0.clamp(-1, 1)
+    mean = (ab[t - 1].sqrt() * beta / (1 - ab[t])) * clipped + ((1 - beta).sqrt() * (1 - ab[t - 1]) / (1 - ab[t])) * sample
+    std = (beta * (1 - ab[t - 1]) / (1 - ab[t])).sqrt()
+    noise = torch.randn(sample.shape, generator=torch.Generator().manual_seed(5), dtype=torch.float64)
+    torch.testing.assert_close(out.prev_sample, mean + std * noise, rtol=1e-9, atol=1e-9)
+    torch.testing.assert_close(out.pred_original_sample, clipped)
