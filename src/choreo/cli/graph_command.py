@@ -37,6 +37,8 @@ def graph_dance(
     top_k: int = typer.Option(512, "--top-k", "-k", help="Candidate clips per 4 s of music (the paper's K)."),
     motion_graph: bool = typer.Option(False, "--motion-graph", help="Ablation: a plain motion graph (first node of each segment only)."),
     no_retempo: bool = typer.Option(False, "--no-retempo", help="Ablation: use each clip's middle 4 s unwarped."),
+    warp_smoothing: Optional[float] = typer.Option(None, help="Sigma (frames) smoothing each clip's re-timing (default 8); "
+                                                   "0 = the paper's raw DTW path: feet slide twice as much, motion beats recur more regularly."),
     seed: int = typer.Option(0, help="0: the paper's deterministic walk; any other seed: another take of the same song."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
@@ -48,13 +50,15 @@ def graph_dance(
       choreo graph song.mp3 -o dance.bvh
       choreo graph song.mp3 -o dance.bvh --repertoire my_moves.npz -k 128
       choreo graph song.mp3 -o dance.npz --style waltz --preview
+      choreo graph song.mp3 -o dance.bvh --warp-smoothing 0      # the paper's raw warps
     """
     from ..errors import ParameterError
 
-    if top_k < 1:
-        raise ParameterError("--top-k must be at least 1")
+    if top_k < 1 or (warp_smoothing is not None and warp_smoothing < 0):
+        raise ParameterError("--top-k must be at least 1 and --warp-smoothing at least 0")
     settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock)
-    backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo)
+    backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
+                           **({} if warp_smoothing is None else {"warp_smoothing": warp_smoothing}))
     dance_one(backend, song, output, settings)
 
 
