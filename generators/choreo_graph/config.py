@@ -64,6 +64,12 @@ class GraphConfig:
     dynamic: bool = True  # False: the paper's Motion Graph ablation (first node of each segment only)
     retempo: bool = True  # False: the "without re-tempo" ablation (middle 4 s, unwarped)
 
+    def __post_init__(self):
+        from choreo.errors import ParameterError
+
+        if self.top_k < 1 or self.blend_frames < 0 or self.dtw_stride < 1 or self.take_variation < 0 or self.warp_smoothing < 0:
+            raise ParameterError("top_k and dtw_stride must be >= 1; blend_frames, take_variation and warp_smoothing >= 0")
+
 
 @dataclass(frozen=True)
 class TrainConfig:

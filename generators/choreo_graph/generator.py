@@ -42,10 +42,7 @@ class ChoreoGraphGenerator(Generator):
         return cls(model, Repertoire.load(repertoire), config, (Path(checkpoint).name, repertoire.name))
 
     def options(self, request: GenerationRequest) -> GraphConfig:
-        config = parse_options("graph", GraphConfig, request.options, base=self.config)
-        if config.top_k < 1 or config.blend_frames < 0 or config.dtw_stride < 1 or config.take_variation < 0:
-            raise ParameterError("top_k and dtw_stride must be >= 1, blend_frames and take_variation >= 0")
-        return config
+        return parse_options("graph", GraphConfig, request.options, base=self.config)
 
     def allowed_clips(self, style: str | None) -> tuple[np.ndarray | None, str | None]:
         """Repertoire clips a style prompt allows: a genre the repertoire has, or all of them."""

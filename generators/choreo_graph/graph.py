@@ -198,8 +198,7 @@ def search_graph(windows: MusicWindows, candidates: np.ndarray, warps: np.ndarra
 def played_clips(path: list[Node], repertoire: Repertoire) -> list[dict]:
     """What a dance is made of, one entry per run of continuing nodes: the repertoire clip, the
     frames of its source motion it plays (first, last; warped in between) and the output frames."""
-    sources, starts = repertoire.origins
-    names = [str(name).rpartition("@")[0] or str(name) for name in repertoire.names]
+    _, starts = repertoire.origins
     runs: list[dict] = []
     for second, node in enumerate(path):
         source = [round(float(starts[node.clip] + node.frames[0]), 2), round(float(starts[node.clip] + node.frames[-1]), 2)]
@@ -207,7 +206,8 @@ def played_clips(path: list[Node], repertoire: Repertoire) -> list[dict]:
         if runs and node.continues(path[second - 1]):
             runs[-1]["source_frames"][1], runs[-1]["output_frames"][1] = source[1], output[1]
         else:
-            runs.append({"clip": str(repertoire.names[node.clip]), "source": names[node.clip],
+            name = str(repertoire.names[node.clip])
+            runs.append({"clip": name, "source": name.rpartition("@")[0] or name,
                          "source_frames": source, "output_frames": output})
     return runs
 
