@@ -12,6 +12,7 @@ from choreo.music.beats import (
     estimate_beats,
     estimate_tempo,
     metrical_salience,
+    track_beats,
 )
 from choreo.music.features import BlockConfig
 from tests.test_music import click_track
@@ -93,3 +94,31 @@ def test_streamed_envelopes_equal_the_whole_song():
     streamed = featurizer.beat_envelopes()
     assert streamed.shape == whole.shape
     np.testing.assert_allclose(streamed, whole, atol=1e-3)
+
+
+def noisy_pulses(seed: int, frames: int, period: float) -> np.ndarray:
+    """Half-wave-rectified noise with accented pulses, a silent lead-in and a fade-out."""
+    rng = np.random.default_rng(seed)
+    envelope = np.maximum(rng.normal(size=frames), 0.0)
+    envelope[np.arange(rng.uniform(0, period), frames, period).astype(int)] += rng.uniform(1, 4)
+    envelope[: frames // 10] = 0.0
+    envelope[-frames // 8:] *= np.linspace(1, 0, frames // 8) ** 2
+    return envelope
+
+
+@pytest.mark.parametrize("seed,frames,bpm", [(0, 5000, 128.0), (1, 3000, 87.0), (2, 800, 174.0), (3, 40, 120.0),
+                                              (4, 12000, 61.3)])
+def test_track_beats_is_librosas_dynamic_programme(seed, frames, bpm):
+    # choreo's numpy version replaces librosa.beat.beat_track (whose module compiles a numba kernel
+    # in every process); librosa itself is the oracle, frame for frame, trimming included.
+    librosa = pytest.importorskip("librosa")
+    envelope = noisy_pulses(seed, frames, ENVELOPE_FPS * 60 / bpm * 1.01)
+    _, expected = librosa.beat.beat_track(onset_envelope=envelope, sr=ENVELOPE_FPS * BEAT_HOP, hop_length=BEAT_HOP,
+                                          bpm=bpm, tightness=1600.0, units="frames")
+    np.testing.assert_array_equal(track_beats(envelope, ENVELOPE_FPS, bpm, tightness=1600.0), expected)
+    assert len(expected) > 0 or frames < 100
+
+
+def test_track_beats_of_nothing_is_nothing():
+    assert len(track_beats(np.zeros(500), ENVELOPE_FPS, 120.0)) == 0
+    assert len(track_beats(np.ones(1), ENVELOPE_FPS, 120.0)) == 0
