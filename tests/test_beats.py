@@ -12,6 +12,7 @@ from choreo.music.beats import (
     estimate_beats,
     estimate_tempo,
     metrical_salience,
+    percussive_part,
     track_beats,
 )
 from choreo.music.features import BlockConfig
@@ -122,3 +123,14 @@ def test_track_beats_is_librosas_dynamic_programme(seed, frames, bpm):
 def test_track_beats_of_nothing_is_nothing():
     assert len(track_beats(np.zeros(500), ENVELOPE_FPS, 120.0)) == 0
     assert len(track_beats(np.ones(1), ENVELOPE_FPS, 120.0)) == 0
+
+
+def test_percussive_part_is_librosas_hpss():
+    # librosa.decompose imports scikit-learn; choreo's own median-filter HPSS must equal it, silent bins included.
+    librosa = pytest.importorskip("librosa")
+    rng = np.random.default_rng(5)
+    power = (rng.gamma(0.5, size=(64, 700)) * (rng.random((64, 1)) < 0.9)).astype(np.float32)
+    power[:, 100:140] = 0.0  # silence: the soft mask's 0 / 0 case
+    power[:, ::37] *= 30.0  # broadband clicks
+    _, expected = librosa.decompose.hpss(power, kernel_size=(9, 31))
+    np.testing.assert_array_equal(percussive_part(power, (9, 31)), expected)

@@ -26,7 +26,7 @@ ENVELOPE_MELS = 64
 ENVELOPE_FFT = 1024
 ENVELOPE_FMAX = 7000.0
 ONSET_LAG = 2  # frames between the spectra an onset compares (21 ms)
-HPSS_KERNEL = (9, 31)  # (mel bands, frames): percussive = broadband and short
+HPSS_KERNEL = (9, 31)  # medians over 9 frames (harmonic: steady) and 31 mel bands (percussive: broadband)
 
 MIN_BPM, MAX_BPM, BPM_STEP = 50.0, 260.0, 0.25
 PRIOR_BPM = 120.0
@@ -42,8 +42,24 @@ def onset_envelopes(samples: np.ndarray, sr: int) -> np.ndarray:
     percussive part. Frame h describes time h * BEAT_HOP / sr (centred analysis)."""
     mel = librosa.feature.melspectrogram(y=samples, sr=sr, n_fft=ENVELOPE_FFT, hop_length=BEAT_HOP,
                                          n_mels=ENVELOPE_MELS, fmax=ENVELOPE_FMAX)
-    _, percussive = librosa.decompose.hpss(mel, kernel_size=HPSS_KERNEL)
+    percussive = percussive_part(mel)
     return np.stack([_onset_strength(mel, sr), _onset_strength(percussive, sr)]).astype(np.float32)
+
+
+def percussive_part(power: np.ndarray, kernel: tuple[int, int] = HPSS_KERNEL) -> np.ndarray:
+    """Median-filter harmonic/percussive separation (Fitzgerald 2010), percussive part, with a
+    Wiener-like soft mask of power 2: librosa's ``decompose.hpss`` (equal outputs, tested), whose
+    module imports scikit-learn on the way to every dance. ``kernel`` = (frames of the harmonic
+    median, bins of the percussive one), in librosa's order."""
+    harmonic = scipy.ndimage.median_filter(power, size=(1, kernel[0]), mode="reflect")
+    percussive = scipy.ndimage.median_filter(power, size=(kernel[1], 1), mode="reflect")
+    total = np.maximum(harmonic, percussive)
+    silent = total < np.finfo(power.dtype).tiny
+    total[silent] = 1.0
+    mask = (percussive / total) ** 2
+    np.divide(mask, mask + (harmonic / total) ** 2, out=mask, where=~silent)
+    mask[silent] = 0.0
+    return power * mask
 
 
 def _onset_strength(mel_power: np.ndarray, sr: int) -> np.ndarray:
