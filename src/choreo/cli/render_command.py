@@ -12,7 +12,7 @@ from .progress import progress_bar, stderr_console
 
 def render(
     motion: Path = typer.Argument(..., help="Motion file: BVH, NPZ, AIST++ pkl, JSON."),
-    output: str = typer.Option(..., "-o", "--output", help="preview.mp4 (.mov/.mkv/.webm), .gif, or .png (a strip of moments)."),
+    output: str = typer.Option(..., "-o", "--output", help="preview.mp4 (.mov/.mkv/.webm), .gif, .png (a strip of moments) or .html (a page any browser plays)."),
     music: Optional[Path] = typer.Option(None, help="Song to mux into the video (and whose beats --plot beats draws)."),
     plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats) or 'path' (root from above)."),
     size: str = typer.Option("640x480", help="Frame size WIDTHxHEIGHT in pixels."),
@@ -23,6 +23,7 @@ def render(
 
     Examples:
       choreo render dance.bvh --music song.mp3 -o preview.mp4
+      choreo render dance.bvh --music song.mp3 -o preview.html
       choreo render dance.bvh -o strip.png --strip 8
       choreo render dance.bvh --music song.mp3 --plot beats -o beats.png
       choreo render dance.bvh --plot path -o path.svg
@@ -40,6 +41,8 @@ def render(
 
             beats = (Music.from_file(music).beat_times * dance.fps).round().astype(int)
         render_plot(plot, dance, output, beats)
+    elif Path(output).suffix.lower() == ".html":
+        render_html(dance, output, music)
     else:
         render_preview(dance, Path(output), config, music)
     stderr_console.print(f"wrote {output}", highlight=False)
@@ -65,3 +68,17 @@ def render_preview(motion, output: Path, config, music: Path | None) -> None:
 
     with progress_bar(f"rendering {output.name}") as update:
         render_motion(motion, output, config, music, progress=lambda done, total: update(done, total))
+
+
+def render_html(motion, output: str, music: Path | None) -> None:
+    """One self-contained page: the dancer, the song inlined and its beats on the timeline."""
+    from ..fileio import atomic_output
+    from ..render.html import write_html_preview
+
+    beats = None
+    if music is not None:
+        from ..music import Music
+
+        beats = Music.from_file(music).beat_times
+    with atomic_output(output, binary=True) as handle:
+        write_html_preview(motion, music, beats, handle)

@@ -16,6 +16,7 @@ from ..fileio import STDOUT, atomic_output
 from ..motion import Motion
 from .aistpp import read_aistpp_pkl, write_aistpp_pkl
 from .bvh import read_bvh, write_bvh
+from .gltf import read_glb, write_glb
 from .json_format import read_json, write_json
 from .npy import read_npy_joint_positions, write_npy
 from .npz import read_npz, read_npz_joint_positions, write_npz
@@ -38,6 +39,8 @@ FORMATS = {
         MotionFormat("pkl", ".pkl", "AIST++ motion pickle (60 fps on read)", read_aistpp_pkl, write_aistpp_pkl),
         MotionFormat("json", ".json", "choreo motion JSON", read_json, write_json),
         MotionFormat("npy", ".npy", "joint positions (T, 24, 3), metres, Y up", None, write_npy),
+        MotionFormat("glb", ".glb", "glTF 2.0 binary: SMPL-24 skin, a skinned body, the dance as its animation",
+                     read_glb, write_glb),
     )
 }
 
