@@ -151,3 +151,55 @@ def test_prepare_summarises_a_dataset(capsys, tmp_path, monkeypatch):
     code, out, _ = run_cli(capsys, "prepare", AISTPP_FIXTURES, "--stride", "1")
     assert code == 0
     assert "clips" in out and "windows" in out
+
+
+def test_motion_commands_read_a_pipe(tmp_path):
+    # `choreo generate song -o - -f npz | choreo render - ...`: a real pipe between two processes.
+    import subprocess
+    import sys
+
+    from choreo.formats import read_motion
+
+    dance = write_dance(tmp_path / "d.bvh")
+    choreo = [sys.executable, "-m", "choreo"]
+    piped = subprocess.run(choreo + ["convert", tmp_path / "d.bvh", "-", "-f", "npz"], capture_output=True, check=True).stdout
+    result = subprocess.run(choreo + ["convert", "-", tmp_path / "back.json"], input=piped, capture_output=True)
+    assert result.returncode == 0, result.stderr
+    np.testing.assert_allclose(read_motion(tmp_path / "back.json").joint_positions(), dance.joint_positions(), atol=2e-3)
+
+
+@pytest.mark.parametrize("format", ["npz", "bvh", "json", "glb", "pkl"])
+def test_piped_motion_is_read_in_the_format_its_bytes_show(tmp_path, monkeypatch, format):
+    import io
+    import sys
+
+    from choreo.formats import read_motion, write_motion
+
+    dance = write_dance(tmp_path / "d.bvh")
+    write_motion(dance, tmp_path / f"d.{format}")
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO((tmp_path / f"d.{format}").read_bytes())))
+    back = read_motion("-")
+    tolerance = 2e-3 if format == "bvh" else 1e-4  # BVH stores degrees with 6 decimals
+    assert back.num_frames == dance.num_frames  # (an AIST++ pkl has no frame rate: read as 60 fps, frames as written)
+    np.testing.assert_allclose(back.joint_positions(), dance.joint_positions(), atol=tolerance)
+    assert not list(Path(tmp_path).glob("choreo-stdin-*"))
+
+
+@pytest.mark.parametrize("piped,message", [(b"", "no motion on stdin"), (b"Hello, world", "cannot tell the format")])
+def test_a_pipe_without_a_motion_is_one_line_error(capsys, monkeypatch, piped, message):
+    import io
+    import sys
+
+    monkeypatch.setattr(sys, "stdin", io.TextIOWrapper(io.BytesIO(piped)))
+    code, _, err = run_cli(capsys, "info", "-")
+    assert_one_line_error(code, err)
+    assert message in err
+
+
+def test_render_writes_an_html_preview(capsys, tmp_path):
+    write_dance(tmp_path / "d.bvh")
+    code, _, err = run_cli(capsys, "render", tmp_path / "d.bvh", "--music", EXAMPLE_SONG, "-o", tmp_path / "p.html")
+    assert code == 0, err
+    page = (tmp_path / "p.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and "data:audio/wav;base64," in page
+    assert not list(tmp_path.glob("*.tmp*"))

@@ -262,11 +262,14 @@ def test_joint_positions_from_every_format(tmp_path):
 
 
 def test_unknown_extensions(tmp_path):
-    (tmp_path / "a.fbx").write_bytes(b"x")
+    (tmp_path / "a.c3d").write_bytes(b"x")
     with pytest.raises(InputError, match="unknown motion file type"):
-        read_motion(tmp_path / "a.fbx")
+        read_motion(tmp_path / "a.c3d")
     with pytest.raises(OutputError, match="unknown motion file type"):
-        write_motion(random_motion(), tmp_path / "a.fbx")
+        write_motion(random_motion(), tmp_path / "a.c3d")
+    (tmp_path / "a.fbx").write_bytes(b"x")
+    with pytest.raises(InputError, match="writes .fbx files but does not read them"):
+        read_motion(tmp_path / "a.fbx")
     with pytest.raises(OutputError, match="unknown motion format"):
         write_motion(random_motion(), tmp_path / "a.bvh", format="c3d")
 

@@ -16,6 +16,8 @@ AUDIO_EXTENSIONS = (".wav", ".mp3", ".ogg", ".flac", ".opus")
 def _require_file(path: Path) -> Path:
     from ..errors import InputError
 
+    if str(path) == "-":  # stdin: the motion readers take it
+        return path
     if not path.exists():
         raise InputError(f"{path}: no such file")
     if path.is_dir():
@@ -24,13 +26,14 @@ def _require_file(path: Path) -> Path:
 
 
 def info(
-    path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json) or an audio file."),
+    path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json, glb; - reads stdin) or an audio file."),
 ) -> None:
     """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats).
 
     Examples:
       choreo info dance.bvh
       choreo info examples/drum_and_bass_174bpm.wav
+      choreo generate song.mp3 -o - -f npz | choreo info -
     """
     _require_file(path)
     table = Table(show_header=False, box=None)
@@ -61,24 +64,27 @@ def info(
 
 
 def convert(
-    source: Path = typer.Argument(..., help="Input motion: .bvh, .npz (AIST++ keys), .pkl (AIST++), .json."),
+    source: Path = typer.Argument(..., help="Input motion: .bvh, .npz (AIST++ keys), .pkl (AIST++), .json, .glb; - reads stdin."),
     target: str = typer.Argument(..., help="Output path, or - for stdout (needs --format)."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     fps: Optional[float] = typer.Option(None, help="Resample to this frame rate."),
+    rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo."),
 ) -> None:
-    """Convert a motion between BVH, NPZ, AIST++ pkl, JSON and joint-position .npy.
+    """Convert a motion between BVH, NPZ, AIST++ pkl, JSON, joint-position .npy, glTF (.glb) and FBX.
 
     Examples:
       choreo convert gBR_sBM_cAll_d04_mBR0_ch01.pkl dance.bvh --fps 30
       choreo convert dance.bvh dance.npz
       choreo convert dance.bvh - --format json | head
+      choreo convert dance.bvh dance.fbx --rig mixamo      # FBX needs Blender
     """
-    from ..formats import read_motion, write_motion
+    from ..formats import check_output_format, read_motion, write_motion
 
+    check_output_format(target, format, rig)  # a bad target or rig refused before reading anything
     motion = read_motion(_require_file(source))
     if fps is not None:
         motion = motion.resample(fps)
-    written = write_motion(motion, target, format=format)
+    written = write_motion(motion, target, format=format, rig=rig)
     if target != "-":
         stderr_console.print(f"wrote {written} ({motion.num_frames} frames at {motion.fps:g} fps)")
 

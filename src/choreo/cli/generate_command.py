@@ -17,7 +17,7 @@ from .progress import progress_bar, stderr_console
 
 SONG = typer.Argument(..., help="Audio file: wav, mp3, ogg, flac or opus.")
 OUTPUT = typer.Option(..., "-o", "--output",
-                      help="Output motion file (.bvh, .npz, .json, .npy) or - for stdout; repeat for several.")
+                      help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several.")
 STYLE = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text, or a schedule 0:30=waltz,30:=cha-cha.")
 CHECKPOINT = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one.")
 GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
@@ -26,6 +26,7 @@ GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the
 SAMPLER = typer.Option(None, help="sgmd: ddim (default; fast, any number of steps) or ddpm (the full chain).")
 SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
+RIG = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo (default: SMPL-24).")
 BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
                          help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
 FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
@@ -35,7 +36,7 @@ FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
 def generate(
     songs: List[Path] = typer.Argument(..., help="Audio files: wav, mp3, ogg, flac or opus (several with --out-dir)."),
     output: Optional[List[str]] = typer.Option(
-        None, "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy) or - for stdout; repeat for several."),
+        None, "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several."),
     out_dir: Optional[Path] = typer.Option(None, help="Folder for one dance per song, named after the song (batch mode)."),
     style: Optional[str] = STYLE,
     seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it."),
@@ -45,7 +46,7 @@ def generate(
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
-    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
 ) -> None:
     """Generate a dance for a song, or for many songs in one run.
 
@@ -58,6 +59,7 @@ def generate(
       choreo generate song.mp3 -o dance.bvh --style 0:30=waltz,30:=cha-cha --seed-motion opening.bvh
       choreo generate songs/*.mp3 --out-dir out/ --format bvh,npz --json
       choreo generate song.mp3 -o dance.bvh --preview      # and dance.mp4 to watch
+      choreo generate song.mp3 -o dance.fbx --rig mixamo   # for a Mixamo character (needs Blender)
     """
     import json
 
@@ -94,7 +96,7 @@ def generate(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
-                        beat_lock, foot_lock)
+                        beat_lock, foot_lock, rig=rig)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
@@ -121,7 +123,7 @@ def inbetween(
     key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
 
@@ -151,7 +153,7 @@ def inbetween(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
-                        foot_lock=foot_lock)
+                        foot_lock=foot_lock, rig=rig)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -162,7 +164,7 @@ def inpaint(
     joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
 
@@ -187,7 +189,7 @@ def inpaint(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
-                        foot_lock=foot_lock)
+                        foot_lock=foot_lock, rig=rig)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -196,7 +198,7 @@ def trajectory(
     path: Path = typer.Option(..., help="Root path on the floor: CSV (x,z or t,x,z; optional y) or a motion file."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
 
@@ -212,7 +214,7 @@ def trajectory(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
-                        foot_lock=foot_lock)
+                        foot_lock=foot_lock, rig=rig)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -231,6 +233,7 @@ class Settings:
     preview: bool = False  # render an MP4 with the music beside the first output file
     beat_lock: bool = True  # finishing: motion beats re-timed onto the music's beats
     foot_lock: bool = False  # finishing: planted feet's drift moved onto the root (measured: off)
+    rig: str | None = None  # write .bvh/.fbx retargeted onto this rig (mixamo); None: SMPL-24
 
 
 def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None,
@@ -278,7 +281,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     for path in output:
         if path != "-":
             output_target(path)  # a writable folder, and nothing there that is not a regular file
-        check_output_format(path, settings.format)  # every output checked before any work or any file
+        check_output_format(path, settings.format, settings.rig)  # every output checked before any work or any file
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)))
     constraints = build_constraints(music) if build_constraints else None
@@ -293,7 +296,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     meta = motion.metadata
     if meta.get("style_notice"):
         stderr_console.print(f"[yellow]note:[/yellow] {meta['style_notice']}")
-    write_motions(motion, output, format=settings.format)
+    write_motions(motion, output, format=settings.format, rig=settings.rig)
     written = [path for path in output if path != "-"]
     if settings.preview and written:
         from ..render import RenderConfig

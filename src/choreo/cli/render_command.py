@@ -11,7 +11,7 @@ from .progress import progress_bar, stderr_console
 
 
 def render(
-    motion: Path = typer.Argument(..., help="Motion file: BVH, NPZ, AIST++ pkl, JSON."),
+    motion: Path = typer.Argument(..., help="Motion file: BVH, NPZ, AIST++ pkl, JSON, glb; - reads stdin."),
     output: str = typer.Option(..., "-o", "--output", help="preview.mp4 (.mov/.mkv/.webm), .gif, .png (a strip of moments) or .html (a page any browser plays)."),
     music: Optional[Path] = typer.Option(None, help="Song to mux into the video (and whose beats --plot beats draws)."),
     plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats) or 'path' (root from above)."),
@@ -24,6 +24,7 @@ def render(
     Examples:
       choreo render dance.bvh --music song.mp3 -o preview.mp4
       choreo render dance.bvh --music song.mp3 -o preview.html
+      choreo generate song.mp3 -o - -f npz | choreo render - --music song.mp3 -o preview.mp4
       choreo render dance.bvh -o strip.png --strip 8
       choreo render dance.bvh --music song.mp3 --plot beats -o beats.png
       choreo render dance.bvh --plot path -o path.svg

@@ -74,26 +74,32 @@ def write_bvh(motion: Motion, handle, units: str = "m") -> None:
     handle.write(text.getvalue().encode())
 
 
-def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float) -> None:
+def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float, end_sites: dict | None = None) -> None:
+    """The HIERARCHY block, children depth first; ``end_sites`` maps a joint index to its End Site
+    offset (default: every leaf, from END_SITES by name). Retargeted rigs pass their own."""
+    if end_sites is None:
+        end_sites = {j: END_SITES.get(skeleton.names[j], (0.0, 0.05, 0.0))
+                     for j in range(len(skeleton.names)) if not skeleton.children(j)}
     out.write("HIERARCHY\n")
     rotation_channels = " ".join(f"{axis}rotation" for axis in ROTATION_ORDER)
+
+    def vector(values) -> str:
+        rounded = np.round(np.asarray(values, dtype=np.float64) * scale, 6) + 0.0  # + 0.0: no "-0.000000"
+        return " ".join(f"{v:.6f}" for v in rounded)
 
     def write_joint(j: int, depth: int) -> None:
         pad = "\t" * depth
         keyword = "ROOT" if skeleton.parents[j] < 0 else "JOINT"
-        offset = skeleton.offsets[j] * scale
         out.write(f"{pad}{keyword} {skeleton.names[j]}\n{pad}{{\n")
-        out.write(f"{pad}\tOFFSET {offset[0]:.6f} {offset[1]:.6f} {offset[2]:.6f}\n")
+        out.write(f"{pad}\tOFFSET {vector(skeleton.offsets[j])}\n")
         if keyword == "ROOT":
             out.write(f"{pad}\tCHANNELS 6 Xposition Yposition Zposition {rotation_channels}\n")
         else:
             out.write(f"{pad}\tCHANNELS 3 {rotation_channels}\n")
-        children = skeleton.children(j)
-        for child in children:
+        for child in skeleton.children(j):
             write_joint(child, depth + 1)
-        if not children:
-            end = np.array(END_SITES.get(skeleton.names[j], (0.0, 0.05, 0.0))) * scale
-            out.write(f"{pad}\tEnd Site\n{pad}\t{{\n{pad}\t\tOFFSET {end[0]:.6f} {end[1]:.6f} {end[2]:.6f}\n{pad}\t}}\n")
+        if j in end_sites:
+            out.write(f"{pad}\tEnd Site\n{pad}\t{{\n{pad}\t\tOFFSET {vector(end_sites[j])}\n{pad}\t}}\n")
         out.write(f"{pad}}}\n")
 
     write_joint(0, 0)

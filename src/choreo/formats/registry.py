@@ -3,23 +3,26 @@
 from __future__ import annotations
 
 import contextlib
-
 import os
+import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from ..errors import InputError, MotionFormatError, OutputError
+from ..errors import InputError, MotionFormatError, OutputError, ParameterError
 from ..fileio import STDOUT, atomic_output
 from ..motion import Motion
 from .aistpp import read_aistpp_pkl, write_aistpp_pkl
 from .bvh import read_bvh, write_bvh
+from .fbx import NO_BLENDER, blender_command, write_fbx_stream
 from .gltf import read_glb, write_glb
 from .json_format import read_json, write_json
 from .npy import read_npy_joint_positions, write_npy
 from .npz import read_npz, read_npz_joint_positions, write_npz
+from .rigs import RIGS, get_rig, read_bvh_rig, write_bvh_rig
 
 
 @dataclass(frozen=True)
@@ -31,16 +34,32 @@ class MotionFormat:
     write: Callable[[Motion, object], None]
 
 
+def read_bvh_any_rig(path: Path) -> Motion:
+    """A BVH on SMPL-24, or on a rig choreo retargets to (Mixamo names), read as SMPL-24."""
+    try:
+        return read_bvh(path)
+    except MotionFormatError as smpl_error:
+        for rig in RIGS.values():
+            try:
+                return read_bvh_rig(path, rig)
+            except MotionFormatError:
+                continue
+        raise smpl_error
+
+
 FORMATS = {
     f.name: f
     for f in (
-        MotionFormat("bvh", ".bvh", "BVH, SMPL-24 skeleton, metres, Y up", read_bvh, write_bvh),
+        MotionFormat("bvh", ".bvh", "BVH, SMPL-24 skeleton (or a Mixamo rig's), metres, Y up", read_bvh_any_rig,
+                     write_bvh),
         MotionFormat("npz", ".npz", "NPZ with AIST++ keys (smpl_poses, smpl_trans, ...)", read_npz, write_npz),
         MotionFormat("pkl", ".pkl", "AIST++ motion pickle (60 fps on read)", read_aistpp_pkl, write_aistpp_pkl),
         MotionFormat("json", ".json", "choreo motion JSON", read_json, write_json),
         MotionFormat("npy", ".npy", "joint positions (T, 24, 3), metres, Y up", None, write_npy),
         MotionFormat("glb", ".glb", "glTF 2.0 binary: SMPL-24 skin, a skinned body, the dance as its animation",
                      read_glb, write_glb),
+        MotionFormat("fbx", ".fbx", "FBX through Blender: armature and baked animation, Y up, -Z forward (Unity, Unreal)",
+                     None, write_fbx_stream),
     )
 }
 
@@ -72,23 +91,74 @@ def _check_readable(path: Path) -> None:
         raise MotionFormatError(f"{path} is empty")
 
 
+STDIN = "-"
+MAX_PIPED_BYTES = 2 * 2**30  # a motion piped in is held in memory once; more than this is not a dance
+MAGIC = ((b"PK\x03\x04", "npz"), (b"\x93NUMPY", "npy"), (b"glTF", "glb"), (b"\x80", "pkl"),
+         (b"HIERARCHY", "bvh"), (b"{", "json"))  # fmt: skip
+
+
+def read_piped_motion(format: str | None = None, stream=None) -> tuple[Path, Callable[[], None]]:
+    """Motion bytes from stdin (``-``), saved to a temporary file named for their format so every
+    reader can take them as it takes a file: (path, cleanup). The format comes from ``format`` or
+    from the bytes' own signature (zip, .npy, glTF, pickle, BVH, JSON)."""
+    stream = sys.stdin.buffer if stream is None else stream
+    data = stream.read(MAX_PIPED_BYTES + 1)
+    if len(data) > MAX_PIPED_BYTES:
+        raise InputError(f"the motion on stdin is larger than {MAX_PIPED_BYTES // 2**30} GiB")
+    if not data.strip():
+        raise MotionFormatError("no motion on stdin (nothing was piped in)")
+    if format is not None:
+        chosen = _format_for(STDIN, format, InputError)
+    else:
+        head = data.lstrip()[:16]
+        name = next((name for magic, name in MAGIC if head.startswith(magic)), None)
+        if name is None:
+            raise MotionFormatError("cannot tell the format of the motion on stdin "
+                                    f"(known: {', '.join(FORMATS)}; pipe one of those)")
+        chosen = FORMATS[name]
+    folder = tempfile.TemporaryDirectory(prefix="choreo-stdin-")
+    path = Path(folder.name) / f"stdin{chosen.extension}"
+    path.write_bytes(data)
+    return path, folder.cleanup
+
+
 def read_motion(path: str | os.PathLike, format: str | None = None) -> Motion:
-    """Read a motion file into a Motion (metres, Y up, the file's own fps)."""
+    """Read a motion file into a Motion (metres, Y up, the file's own fps); ``-`` reads stdin."""
+    if str(path) == STDIN:
+        piped, cleanup = read_piped_motion(format)
+        try:
+            return read_motion(piped)
+        finally:
+            cleanup()
     path = Path(path)
     chosen = _format_for(path, format, InputError)
     _check_readable(path)
-    if chosen.read is None:
-        raise InputError(f"{path}: a {chosen.extension} file holds joint positions only, not a rotation-based motion")
+    _check_reader(path, chosen)
     return chosen.read(path)
 
 
+def _check_reader(path: Path, chosen: MotionFormat) -> None:
+    if chosen.read is None and chosen.name == "npy":
+        raise InputError(f"{path}: a {chosen.extension} file holds joint positions only, not a rotation-based motion")
+    if chosen.read is None:
+        raise InputError(f"{path}: choreo writes {chosen.extension} files but does not read them")
+
+
 def read_joint_positions(path: str | os.PathLike, format: str | None = None) -> tuple[np.ndarray, float | None]:
-    """(T, 24, 3) joint positions from any supported file, and its fps (None when unknown: .npy)."""
+    """(T, 24, 3) joint positions from any supported file, and its fps (None when unknown: .npy);
+    ``-`` reads stdin."""
+    if str(path) == STDIN:
+        piped, cleanup = read_piped_motion(format)
+        try:
+            return read_joint_positions(piped)
+        finally:
+            cleanup()
     path = Path(path)
     chosen = _format_for(path, format, InputError)
     _check_readable(path)
     if chosen.name == "npy":
         return read_npy_joint_positions(path), None
+    _check_reader(path, chosen)
     motion = chosen.read(path)
     if chosen.name == "npz":
         stored = read_npz_joint_positions(path)
@@ -97,30 +167,48 @@ def read_joint_positions(path: str | os.PathLike, format: str | None = None) -> 
     return motion.joint_positions(), motion.fps
 
 
-def check_output_format(path: str | os.PathLike, format: str | None = None) -> None:
-    """Refuse (OutputError, exit 3) an output whose format is unknown, before any work is done."""
-    if str(path) == STDOUT and format is None:
-        raise OutputError("writing to stdout (-) needs an explicit --format")
-    _format_for(path, format, OutputError)
-
-
-def write_motions(motion: Motion, paths: list[str], format: str | None = None) -> list[str]:
-    """Write ``motion`` to every path, all or none: each file is written in full to a temporary
-    beside it, and only when every one is written are they moved into place."""
-    for path in paths:
-        check_output_format(path, format)
-    with contextlib.ExitStack() as stack:
-        for path in paths:
-            handle = stack.enter_context(atomic_output(path))
-            _format_for(path, format, OutputError).write(motion, handle)
-    return [str(p) for p in paths]
-
-
-def write_motion(motion: Motion, path: str | os.PathLike, format: str | None = None) -> str:
-    """Write ``motion`` atomically (or to stdout for "-"); returns the path written."""
+def check_output_format(path: str | os.PathLike, format: str | None = None, rig: str | None = None) -> None:
+    """Refuse (OutputError, exit 3) an output whose format is unknown, or that cannot carry ``rig``,
+    before any work is done."""
     if str(path) == STDOUT and format is None:
         raise OutputError("writing to stdout (-) needs an explicit --format")
     chosen = _format_for(path, format, OutputError)
+    _writer(chosen, rig)
+    if chosen.name == "fbx" and blender_command() is None:
+        raise OutputError(NO_BLENDER)
+
+
+RIG_WRITERS = {"bvh": write_bvh_rig, "fbx": write_fbx_stream}  # the formats that can carry another rig
+
+
+def _writer(chosen: MotionFormat, rig: str | None) -> Callable[[Motion, object], None]:
+    """The format's writer, on SMPL-24 or retargeted onto ``rig`` (mixamo: names, tree, T-pose)."""
+    target = get_rig(rig)  # unknown names: a one-line ParameterError
+    if target is None:
+        return chosen.write
+    if chosen.name not in RIG_WRITERS:
+        raise ParameterError(f"--rig {rig} applies to {' and '.join('.' + n for n in RIG_WRITERS)} outputs, "
+                             f"not {chosen.extension}")
+    write = RIG_WRITERS[chosen.name]
+    return lambda motion, handle: write(motion, handle, rig=target)
+
+
+def write_motions(motion: Motion, paths: list[str], format: str | None = None, rig: str | None = None) -> list[str]:
+    """Write ``motion`` to every path, all or none: each file is written in full to a temporary
+    beside it, and only when every one is written are they moved into place."""
+    for path in paths:
+        check_output_format(path, format, rig)
+    with contextlib.ExitStack() as stack:
+        for path in paths:
+            handle = stack.enter_context(atomic_output(path))
+            _writer(_format_for(path, format, OutputError), rig)(motion, handle)
+    return [str(p) for p in paths]
+
+
+def write_motion(motion: Motion, path: str | os.PathLike, format: str | None = None, rig: str | None = None) -> str:
+    """Write ``motion`` atomically (or to stdout for "-"), optionally on another ``rig``; returns the path."""
+    check_output_format(path, format, rig)
+    write = _writer(_format_for(path, format, OutputError), rig)
     with atomic_output(path) as handle:
-        chosen.write(motion, handle)
+        write(motion, handle)
     return str(path)
