@@ -89,11 +89,41 @@ class Repertoire:
             raise
         except Exception as error:
             raise InputError(f"{path} is not a readable repertoire ({type(error).__name__})") from None
+        check_arrays(values, str(path))
         values["rotations"] = values["rotations"].astype(np.float32)
-        repertoire = cls(**values)
-        if len(repertoire) == 0 or repertoire.rotations.shape[1:] != (CLIP_FRAMES, 24, 4):
-            raise InputError(f"{path}: empty repertoire or clips that are not 8 s at 30 fps on SMPL-24")
-        return repertoire
+        return cls(**values)
+
+
+# Per array: the shape after the clip axis (None: any positive size) and the dtype kinds accepted.
+CLIP_ARRAYS = {
+    "names": ((), "U"), "genres": ((), "U"), "root_positions": ((CLIP_FRAMES, 3), "f"),
+    "rotations": ((CLIP_FRAMES, 24, 4), "f"), "poses": ((CLIP_FRAMES, 24, 3), "f"), "style": ((None,), "f"),
+    "beat_counts": ((), "fiu"), "tempo": ((CLIP_FRAMES,), "f"),
+}  # fmt: skip
+
+
+def check_arrays(values: dict[str, np.ndarray], where: str) -> None:
+    """Refuse a repertoire whose arrays disagree in clip count, shape or kind, or hold NaN:
+    the graph indexes them all by clip and would fail far from the file otherwise."""
+    count = len(values["names"]) if np.ndim(values["names"]) == 1 else 0
+    if count == 0:
+        raise InputError(f"{where}: empty repertoire (no clip names)")
+    for key, (shape, kinds) in CLIP_ARRAYS.items():
+        array = values[key]
+        expected = (count,) + shape
+        fits = array.ndim == len(expected) and all(e is None and n > 0 or n == e
+                                                   for n, e in zip(array.shape, expected))
+        if not fits or array.dtype.kind not in kinds:
+            wanted = "x".join("D" if e is None else str(e) for e in expected)
+            raise InputError(f"{where}: {key} is {array.dtype} {array.shape}, expected {wanted} for {count} "
+                             "clips of 8 s at 30 fps on SMPL-24")
+        if kinds != "U" and not np.isfinite(array).all():
+            raise InputError(f"{where}: {key} holds NaN or infinite values")
+    offsets = values["offsets"]
+    if offsets.shape != (24, 3) or offsets.dtype.kind != "f" or not np.isfinite(offsets).all():
+        raise InputError(f"{where}: offsets must be 24x3 finite numbers (the SMPL-24 skeleton)")
+    if values["source"].dtype.kind != "U":
+        raise InputError(f"{where}: source is not text")
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,8 @@ def read_npy_joint_positions(path) -> np.ndarray:
         positions = load_npy(path)  # the header's size checked against the file before loading
     except (OSError, ValueError, EOFError) as error:
         raise MotionFormatError(f"{path}: not a readable .npy array ({type(error).__name__})") from None
+    if positions.dtype.kind not in "fiu":
+        raise MotionFormatError(f"{path}: holds {positions.dtype} values, not joint positions")
     if positions.ndim == 2 and positions.shape[1] == 72:
         positions = positions.reshape(-1, 24, 3)
     if positions.ndim != 3 or positions.shape[1:] != (24, 3):

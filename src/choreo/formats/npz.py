@@ -16,7 +16,7 @@ from ..errors import MotionFormatError
 from ..motion import Motion
 from ..skeleton import SMPL24
 from .safe_arrays import load_npz
-from .smpl_params import motion_to_smpl_params, smpl_params_to_motion
+from .smpl_params import first_number, motion_to_smpl_params, smpl_params_to_motion
 
 DEFAULT_FPS = 30.0
 
@@ -38,18 +38,17 @@ def read_npz(path) -> Motion:
     data = _load(path)
     if "smpl_poses" not in data or "smpl_trans" not in data:
         raise MotionFormatError(f"{path}: NPZ lacks the smpl_poses and smpl_trans arrays")
-    fps = float(np.asarray(data["fps"]).reshape(-1)[0]) if "fps" in data else DEFAULT_FPS
+    fps = first_number(data["fps"], "fps", str(path)) if "fps" in data else DEFAULT_FPS
     motion = smpl_params_to_motion(data["smpl_poses"], data["smpl_trans"], data.get("smpl_scaling"), fps, str(path))
-    if "offsets" in data and np.asarray(data["offsets"]).shape == (24, 3):
-        offsets = np.asarray(data["offsets"], dtype=np.float64)
-        if np.isfinite(offsets).all():
-            motion = motion.with_skeleton(SMPL24.with_offsets(offsets))
+    offsets = _numeric(data.get("offsets"), (24, 3))
+    if offsets is not None:
+        motion = motion.with_skeleton(SMPL24.with_offsets(offsets))
     if "metadata" in data:
         try:
             metadata = json.loads(str(data["metadata"]))
             if isinstance(metadata, dict):
                 motion.metadata = {**metadata, "source": str(path)}
-        except ValueError:
+        except (ValueError, RecursionError):  # metadata is optional: unreadable JSON is ignored
             pass
     return motion
 
@@ -57,5 +56,15 @@ def read_npz(path) -> Motion:
 def read_npz_joint_positions(path) -> np.ndarray | None:
     """The stored (T, 24, 3) joint positions, if the file has them."""
     data = _load(path)
-    positions = data.get("joint_positions")
-    return None if positions is None else np.asarray(positions, dtype=np.float64)
+    return _numeric(data.get("joint_positions"), None)
+
+
+def _numeric(value, shape: tuple | None) -> np.ndarray | None:
+    """An optional array as finite float64 of ``shape`` (any shape if None), else None: a damaged
+    optional entry is ignored (offsets from the template, positions from the rotations)."""
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "fiub":
+        return None
+    if shape is not None and value.shape != shape:
+        return None
+    value = value.astype(np.float64)
+    return value if np.isfinite(value).all() else None

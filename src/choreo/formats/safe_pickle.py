@@ -141,7 +141,8 @@ class _StandInUnpickler(pickle.Unpickler):
     def find_class(self, module, name):
         if (module, name) in _STAND_INS:
             return _STAND_INS[(module, name)]
-        raise UnsafePickle(f"refusing to load {module}.{name}")
+        wanted = f"{module}.{name}"  # the pickle's own words, which may hold newlines
+        raise UnsafePickle(f"refusing to load {wanted if wanted.isprintable() else ascii(wanted)}")
 
 
 def check_opcodes(data: bytes) -> None:

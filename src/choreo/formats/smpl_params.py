@@ -15,10 +15,29 @@ from ..motion import Motion
 from ..skeleton import SMPL24
 
 
+def as_float_array(value, key: str, name: str) -> np.ndarray:
+    """``value`` as float64, or a one-line refusal: a file may hold text, ragged lists or None
+    where numbers belong, and numpy's complaints about them are not the user's language."""
+    if isinstance(value, np.ndarray) and value.dtype.kind not in "fiub":
+        raise MotionFormatError(f"{name}: {key} holds {value.dtype} values, not numbers")
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        raise MotionFormatError(f"{name}: {key} is not an array of numbers") from None
+
+
+def first_number(value, key: str, name: str) -> float:
+    """The first number of a scalar or array entry (fps, smpl_scaling); refused when there is none."""
+    array = as_float_array(value, key, name).reshape(-1)
+    if array.size == 0:
+        raise MotionFormatError(f"{name}: {key} is empty")
+    return float(array[0])
+
+
 def smpl_params_to_motion(poses, trans, scaling, fps: float, name: str) -> Motion:
-    poses = np.asarray(poses, dtype=np.float64)
-    trans = np.asarray(trans, dtype=np.float64)
-    scaling = float(np.asarray(scaling, dtype=np.float64).reshape(-1)[0]) if scaling is not None else 1.0
+    poses = as_float_array(poses, "smpl_poses", name)
+    trans = as_float_array(trans, "smpl_trans", name)
+    scaling = first_number(scaling, "smpl_scaling", name) if scaling is not None else 1.0
     if poses.ndim != 2 or poses.shape[1] != 72:
         raise MotionFormatError(f"{name}: smpl_poses must have shape (T, 72), got {poses.shape}")
     if trans.shape != (len(poses), 3):

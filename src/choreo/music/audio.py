@@ -21,6 +21,7 @@ SUPPORTED_EXTENSIONS = (".wav", ".mp3", ".ogg", ".flac", ".opus")
 MIN_DURATION = 0.5  # seconds; shorter audio has no usable beat or feature window
 SILENCE_RMS = 1e-5  # below this (about -100 dBFS) a whole song counts as silent
 READ_BLOCK_SECONDS = 10.0
+MAX_SAMPLE = 1e4  # full scale is 1: a float WAV 80 dB over it is damaged, and would overflow the spectra
 
 
 def _check_path(path: Path) -> None:
@@ -107,6 +108,9 @@ def iter_audio_blocks(path: str | os.PathLike, sr: int, start: float | None = No
             done = len(data) < want
             if not np.isfinite(data).all():  # float WAVs can hold NaN or inf; nothing downstream could use them
                 raise AudioError(f"{path} contains invalid (NaN or infinite) samples near {position / native_sr:.1f} s")
+            if len(data) and np.abs(data).max() > MAX_SAMPLE:
+                raise AudioError(f"{path} has samples beyond +-{MAX_SAMPLE:g} (full scale is 1) near "
+                                 f"{position / native_sr:.1f} s: a damaged float file")
             position += len(data)
             mono = data.mean(axis=1) if len(data) else np.zeros(0, np.float32)
             out = mono if resampler is None else resampler.resample_chunk(mono, last=done)

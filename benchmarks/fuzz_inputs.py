@@ -1,0 +1,720 @@
+"""Mutation fuzzing of every input format choreo reads (issue 18): no input may be an internal error.
+
+Valid seed files are made with choreo's own writers, mutated (byte flips, truncation, splices,
+number replacement, duplication, and field-level edits of NPZ/pickle/checkpoint contents) and fed
+to the same reader the CLI calls, in-process, inside long-lived forked workers that run under a
+memory cap and a per-input time limit. Each input is classified:
+
+  accepted  the reader returned
+  refused   a choreo error (exit 2 or 3) with a one-line message: the CLI's clean refusal
+  INTERNAL  any other exception: the CLI's exit 70 (also a choreo error with another exit code
+            or an empty or multi-line message)
+  HANG      over the time limit (the worker is killed and replaced)
+  MEMORY    MemoryError or a failed allocation under the cap
+  CRASH     the worker died (a signal from C code)
+  ROUNDTRIP a motion accepted, written as BVH and NPZ by choreo, and then refused by choreo
+
+Every non-clean input's bytes go to the findings folder, with a .txt saying what happened.
+
+    nice -n 10 .venv/bin/python benchmarks/fuzz_inputs.py --seconds 600
+    nice -n 10 .venv/bin/python benchmarks/fuzz_inputs.py --inputs 100000 --workers 2
+    .venv/bin/python benchmarks/fuzz_inputs.py --formats bvh,csv --inputs 2000 --seed 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import io
+import multiprocessing
+import multiprocessing.connection
+import os
+import pickle
+import random
+import re
+import resource
+import shutil
+import sys
+import tempfile
+import time
+import traceback
+import warnings
+import zipfile
+from collections import Counter, defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+EXTENSIONS = {"bvh": ".bvh", "npz": ".npz", "npy": ".npy", "pkl": ".pkl", "wav": ".wav", "csv": ".csv",
+              "sgmd": ".pt", "repertoire": ".npz"}  # fmt: skip
+FORMATS = tuple(EXTENSIONS)
+ZIP_FORMATS = {"npz", "sgmd", "repertoire"}
+CLEAN = ("accepted", "refused")
+CLASSES = ("accepted", "refused", "INTERNAL", "HANG", "MEMORY", "CRASH", "ROUNDTRIP")
+DEFAULT_FINDINGS = Path(tempfile.gettempdir()) / "choreo-fuzz-findings"
+
+
+# -- seeds -------------------------------------------------------------------------------------
+def _small_motion(frames: int = 6, seed: int = 0):
+    from choreo.motion import Motion
+
+    rng = np.random.default_rng(seed)
+    root = np.zeros((frames, 3)) + [0.0, 0.9, 0.0] + rng.normal(scale=0.05, size=(frames, 3))
+    return Motion.from_axis_angle(root, rng.normal(scale=0.2, size=(frames, 24, 3)), fps=30.0)
+
+
+def _write(motion, writer, **kwargs) -> bytes:
+    buffer = io.BytesIO()
+    writer(motion, buffer, **kwargs)
+    return buffer.getvalue()
+
+
+def motion_seeds() -> dict[str, list[bytes]]:
+    """BVH, NPZ, NPY and AIST++ pkl seeds from choreo's own writers (pickles in several protocols)."""
+    from choreo.formats.aistpp import write_aistpp_pkl
+    from choreo.formats.bvh import write_bvh
+    from choreo.formats.npy import write_npy
+    from choreo.formats.npz import write_npz
+    from choreo.formats.smpl_params import motion_to_smpl_params
+
+    motion = _small_motion()
+    params = {k: v.astype(np.float64) for k, v in motion_to_smpl_params(motion, 95.0).items()}
+    params["smpl_loss"] = 0.0
+    pickles = [pickle.dumps(params, protocol=p) for p in (0, 2, 5)]
+    return {"bvh": [_write(motion, write_bvh), _write(_small_motion(3, 1), write_bvh, units="cm")],
+            "npz": [_write(motion, write_npz)], "npy": [_write(motion, write_npy)],
+            "pkl": [_write(motion, write_aistpp_pkl)] + pickles}
+
+
+def wav_seeds() -> list[bytes]:
+    """Short WAVs (just over choreo's 0.5 s minimum) in the sample types soundfile writes most."""
+    import soundfile as sf
+
+    seeds = []
+    for rate, channels, subtype in ((16000, 1, "PCM_16"), (22050, 2, "FLOAT"), (8000, 1, "PCM_U8")):
+        t = np.arange(int(0.6 * rate)) / rate
+        tone = 0.3 * np.sin(2 * np.pi * 330 * t) * (1 + (t * 8 % 1 < 0.1))
+        buffer = io.BytesIO()
+        sf.write(buffer, np.repeat(tone[:, None], channels, axis=1), rate, subtype=subtype, format="WAV")
+        seeds.append(buffer.getvalue())
+    return seeds
+
+
+def csv_seeds() -> list[bytes]:
+    return [b"t,x,z\n0,0,0\n0.5,1,0.2\n1.0,1.5,-0.5\n2,0,0\n", b"0,0\n1,0.5\n2,2\n",
+            b"time,x,y,z\n0,0,0.9,0\n1,1,0.95,1\n2,2,0.9,0\n", b"0,0,0\n1,1,1\n"]
+
+
+def sgmd_seed(checkpoint: str | os.PathLike | None = None) -> bytes:
+    """A tiny inference checkpoint: from ``checkpoint`` if given, else one training step of the
+    tiny preset on synthetic windows (a few seconds); never the 23 MB training state."""
+    from choreo_sgmd.checkpoint import inference_state, load_checkpoint, save_checkpoint
+
+    with tempfile.TemporaryDirectory() as folder:
+        if checkpoint is None:
+            checkpoint = _train_tiny(Path(folder))
+        out = Path(folder) / "seed.pt"
+        save_checkpoint(inference_state(load_checkpoint(checkpoint)), out)
+        return out.read_bytes()
+
+
+def _train_tiny(folder: Path) -> Path:
+    import torch
+    from choreo.music import FEATURE_DIM, RHYTHM_DIM
+    from choreo_sgmd.config import TrainConfig, model_config
+    from choreo_sgmd.data import WindowTensors
+    from choreo_sgmd.training import train
+
+    t = torch.arange(150) / 30.0
+    motion = torch.zeros(4, 150, 151)
+    motion[..., 4:7] = torch.stack([torch.sin(t), 0.9 + 0.05 * torch.sin(4 * t), torch.cos(t)], -1)
+    motion[..., 7:] = torch.tensor([1.0, 0, 0, 0, 1, 0]).repeat(24) + 0.1 * torch.sin(3 * t)[:, None]
+    g = torch.Generator().manual_seed(0)
+    data = WindowTensors(motion, torch.randn(4, 150, FEATURE_DIM + RHYTHM_DIM, generator=g), torch.eye(14)[:4],
+                         torch.ones(4, dtype=torch.bool))
+    config = TrainConfig(batch_size=4, max_steps=1, validation_every=1, checkpoint_every=1, prompt_kind="onehot")
+    return train(model_config("tiny", style_dim=14), config, data, None, folder / "tiny")
+
+
+def repertoire_seed() -> bytes:
+    """A two-clip ChoreoGraph repertoire written by Repertoire.save (smooth values: it compresses)."""
+    from choreo.skeleton import SMPL24
+    from choreo_graph.config import CLIP_FRAMES
+    from choreo_graph.repertoire import Repertoire
+
+    n, frames = 2, CLIP_FRAMES
+    rotations = np.zeros((n, frames, 24, 4), np.float32)
+    rotations[..., 0] = 1.0
+    root = np.zeros((n, frames, 3), np.float32) + [0.0, 0.9, 0.0]
+    root[..., 0] = np.linspace(0, 1, frames)
+    repertoire = Repertoire(
+        names=np.array(["song@0", "song@120"]), genres=np.array(["waltz", ""]), root_positions=root,
+        rotations=rotations, offsets=SMPL24.offsets.astype(np.float32),
+        poses=np.zeros((n, frames, 24, 3), np.float16), style=np.ones((n, 32), np.float32),
+        beat_counts=np.array([4.0, 5.0], np.float32), tempo=np.ones((n, frames), np.float32), source=np.array("fuzz"))
+    with tempfile.TemporaryDirectory() as folder:
+        repertoire.save(Path(folder) / "r.npz")
+        return (Path(folder) / "r.npz").read_bytes()
+
+
+def make_seeds(formats=FORMATS, sgmd_checkpoint=None) -> dict[str, list[bytes]]:
+    """Valid seed files for each requested format, made by choreo's own writers."""
+    seeds = motion_seeds()
+    seeds.update(wav=wav_seeds(), csv=csv_seeds())
+    if "sgmd" in formats:
+        seeds["sgmd"] = [sgmd_seed(sgmd_checkpoint)]
+    if "repertoire" in formats:
+        seeds["repertoire"] = [repertoire_seed()]
+    return {name: seeds[name] for name in formats}
+
+
+# -- byte-level mutations ----------------------------------------------------------------------
+NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+TEXT_NUMBERS = [b"0", b"-1", b"-3", b"1", b"7", b"255", b"65536", b"2147483648", b"99999999999999999999",
+                b"1e308", b"1e-320", b"1e-9", b"-1e308", b"nan", b"inf", b"-inf", b"", b"0.0", b"1e5", b"3e9"]
+BINARY_INTS = [0, 1, 2, 0x7F, 0x80, 0xFF, 0x7FFF, 0xFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF, 1 << 40,
+               (1 << 63) - 1, (1 << 64) - 1]
+BINARY_FLOATS = [float("nan"), float("inf"), -float("inf"), 1e308, -1e308, 5e-324, 0.0, -0.0, 1e20]
+
+
+def _position(rng: random.Random, size: int) -> int:
+    """Half the time near the start, where the headers are."""
+    if size <= 1:
+        return 0
+    if rng.random() < 0.5:
+        return min(size - 1, int(rng.expovariate(1 / 64)))
+    return rng.randrange(size)
+
+
+def _chunk(rng: random.Random, data: bytes) -> tuple[int, int]:
+    start = _position(rng, len(data))
+    return start, min(len(data), start + rng.choice((1, 2, 4, 8, 16, 64, 256, 4096)))
+
+
+def flip_bits(rng, data, others):
+    data = bytearray(data)
+    for _ in range(rng.randint(1, 8)):
+        if data:
+            data[_position(rng, len(data))] ^= 1 << rng.randrange(8)
+    return bytes(data)
+
+
+def set_bytes(rng, data, others):
+    data = bytearray(data)
+    for _ in range(rng.randint(1, 4)):
+        if data:
+            data[_position(rng, len(data))] = rng.choice((0, 0xFF, 0x7F, 0x80, 0x20, 0x0A, 0x2D))
+    return bytes(data)
+
+
+def truncate(rng, data, others):
+    return data[:_position(rng, len(data) + 1)] if rng.random() < 0.5 else data[:rng.randrange(len(data) + 1)]
+
+
+def delete_chunk(rng, data, others):
+    start, stop = _chunk(rng, data)
+    return data[:start] + data[stop:]
+
+
+def duplicate_chunk(rng, data, others):
+    start, stop = _chunk(rng, data)
+    times = rng.choice((1, 2, 16, 256))
+    return data[:stop] + data[start:stop] * times + data[stop:]
+
+
+def splice(rng, data, others):
+    """A piece of another seed of the same format (or of this one) put in at a random place."""
+    donor = rng.choice(others) if others else data
+    start, stop = _chunk(rng, donor)
+    at = rng.randrange(len(data) + 1)
+    cut = at + rng.choice((0, stop - start))
+    return data[:at] + donor[start:stop] + data[cut:]
+
+
+def replace_text_number(rng, data, others):
+    """One ASCII number (BVH counts, CSV values, an .npy header's shape) replaced by an odd one."""
+    matches = list(NUMBER.finditer(data[:1 << 16]))
+    if not matches:
+        return flip_bits(rng, data, others)
+    match = rng.choice(matches)
+    return data[:match.start()] + rng.choice(TEXT_NUMBERS) + data[match.end():]
+
+
+def replace_binary_number(rng, data, others):
+    """A little- or big-endian integer or float64 written over the bytes at some offset."""
+    if rng.random() < 0.6:
+        width = rng.choice((1, 2, 4, 8))
+        value = rng.choice(BINARY_INTS) % (1 << (8 * width))
+        raw = value.to_bytes(width, rng.choice(("little", "big")))
+    else:
+        with np.errstate(over="ignore"):
+            raw = np.array(rng.choice(BINARY_FLOATS), rng.choice(("<f8", "<f4"))).tobytes()
+    at = _position(rng, len(data))
+    return data[:at] + raw + data[at + len(raw):]
+
+
+BYTE_MUTATIONS = (flip_bits, set_bytes, truncate, delete_chunk, duplicate_chunk, splice, replace_text_number,
+                  replace_binary_number)
+
+
+def mutate_bytes(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    for _ in range(rng.choice((1, 1, 1, 2, 3))):
+        data = rng.choice(BYTE_MUTATIONS)(rng, data, others)
+    return data
+
+
+# -- structure-aware mutations -----------------------------------------------------------------
+def mutate_zip_member(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """Byte mutations of one member, the zip rewritten with good CRCs (or a member added/dropped),
+    so the mutation reaches the array or pickle reader instead of the CRC check."""
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        members = [(info, archive.read(info)) for info in archive.infolist()]
+    index = rng.randrange(len(members))
+    choice = rng.random()
+    if choice < 0.08:
+        members.pop(index)
+    elif choice < 0.14:
+        info, content = members[index]
+        members.append((zipfile.ZipInfo(info.filename.replace(".npy", "") + "_x.npy"), content))
+    else:
+        info, content = members[index]
+        members[index] = (info, mutate_bytes(rng, content, [c for _, c in members]))
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w") as archive:
+        for info, content in members:
+            archive.writestr(info, content)
+    return out.getvalue()
+
+
+def odd_array(rng: random.Random, array: np.ndarray) -> object:
+    """A value of the wrong kind, shape or range in place of ``array``."""
+    array = np.asarray(array)
+    kind = rng.randrange(12)
+    if kind == 0:
+        return array.astype(str) if array.size < 5000 else np.array("text")
+    if kind == 1:
+        return array[:0]
+    if kind == 2:
+        return array.reshape(-1)
+    if kind == 3:
+        return array[..., None] if array.ndim < 6 else array
+    if kind == 4:
+        return array.T
+    if kind == 5:
+        return np.array(rng.choice(BINARY_FLOATS))
+    if kind == 6:
+        return np.array([], np.float64)
+    if kind == 7:
+        bad = array.astype(np.float64) if array.dtype.kind in "fiub" else np.zeros(3)
+        bad.reshape(-1)[rng.randrange(max(1, bad.size))] = rng.choice(BINARY_FLOATS) if bad.size else 0
+        return bad
+    if kind == 8:
+        return array.astype(rng.choice((np.int8, np.uint8, np.bool_, np.complex64, np.float16)))\
+            if array.dtype.kind in "fiub" else np.zeros(2)
+    if kind == 9:
+        return np.concatenate([array, array]) if array.ndim else np.array([array, array])
+    if kind == 10:
+        return array[:1] if array.ndim else np.array([[1.0]])
+    return np.array(None, dtype=object)
+
+
+def mutate_npz_fields(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """An NPZ with one array dropped, replaced by an odd one, or swapped with another's."""
+    with np.load(io.BytesIO(data), allow_pickle=False) as archive:
+        arrays = {key: archive[key] for key in archive.files}
+    compressed = any(i.compress_type != zipfile.ZIP_STORED for i in zipfile.ZipFile(io.BytesIO(data)).infolist())
+    for _ in range(rng.choice((1, 1, 2))):
+        key = rng.choice(sorted(arrays))
+        if rng.random() < 0.15:
+            del arrays[key]
+        elif rng.random() < 0.15 and len(arrays) > 1:
+            arrays[key] = arrays[rng.choice(sorted(arrays))]
+        else:
+            arrays[key] = odd_array(rng, arrays[key])
+        if not arrays:
+            break
+    out = io.BytesIO()
+    (np.savez_compressed if compressed else np.savez)(out, **arrays)
+    return out.getvalue()
+
+
+def odd_value(rng: random.Random, value: object) -> object:
+    """A replacement for one leaf of a pickled dict or checkpoint: odd numbers, types, shapes."""
+    import torch
+
+    if isinstance(value, bool) or rng.random() < 0.1:
+        return rng.choice((None, "text", [], {}, -1, 0, 1.5, [1, 2], float("nan")))
+    if isinstance(value, int):
+        return rng.choice((0, -1, -5, 1 << 16, 1 << 20, 1 << 31, (1 << 63) - 1, value + 1, value * 2, 3))
+    if isinstance(value, float):
+        return rng.choice(BINARY_FLOATS + [-1.0, 0.5, 1e6])
+    if isinstance(value, str):
+        return rng.choice(("", "other", value * 2, "\x00", "nan"))
+    if isinstance(value, torch.Tensor):
+        odd = odd_array(rng, value.detach().numpy())
+        return torch.from_numpy(np.ascontiguousarray(odd)) if isinstance(odd, np.ndarray) and odd.dtype.kind in "fiub"\
+            else rng.choice((torch.zeros(0), torch.zeros(3), "text"))
+    if isinstance(value, np.ndarray):
+        return odd_array(rng, value)
+    if isinstance(value, (list, tuple)):
+        return rng.choice(([], list(value)[:1], list(value) * 2, list(value)[::-1], None))
+    return None
+
+
+def _leaves(value, path=()):
+    """(path, value) of every dict/list entry, containers included."""
+    items = value.items() if isinstance(value, dict) else enumerate(value) if isinstance(value, list) else ()
+    for key, item in items:
+        yield path + (key,), item
+        yield from _leaves(item, path + (key,))
+
+
+def mutate_tree(rng: random.Random, tree: dict) -> dict:
+    """Drop or replace one or two entries anywhere in a nested dict of values."""
+    for _ in range(rng.choice((1, 1, 2))):
+        leaves = list(_leaves(tree))
+        if not leaves:
+            break
+        path, value = rng.choice(leaves)
+        parent = tree
+        for key in path[:-1]:
+            parent = parent[key]
+        if isinstance(parent, dict) and rng.random() < 0.2:
+            del parent[path[-1]]
+        else:
+            parent[path[-1]] = odd_value(rng, value)
+    return tree
+
+
+def mutate_pickle_fields(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """The seed's dict with an entry dropped or replaced, pickled again in a random protocol."""
+    tree = pickle.loads(data)  # our own seed, never a mutated input
+    tree = {key: (value.tolist() if isinstance(value, np.ndarray) and rng.random() < 0.1 else value)
+            for key, value in tree.items()}
+    return pickle.dumps(mutate_tree(rng, tree), protocol=rng.choice((0, 2, 4, 5)))
+
+
+def mutate_checkpoint_fields(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """The checkpoint with a config number, a weight or a statistic dropped or replaced, saved again."""
+    import torch
+
+    state = torch.load(io.BytesIO(data), weights_only=True)
+    out = io.BytesIO()
+    torch.save(mutate_tree(rng, state), out)
+    return out.getvalue()
+
+
+FIELD_MUTATORS = {"npz": mutate_npz_fields, "repertoire": mutate_npz_fields, "pkl": mutate_pickle_fields,
+                  "sgmd": mutate_checkpoint_fields}
+
+
+def mutate(fmt: str, rng: random.Random, seeds: list[bytes]) -> bytes:
+    """One mutated input of ``fmt``: raw bytes, a zip member's bytes, or a field, at random."""
+    data = rng.choice(seeds)
+    choice = rng.random()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if fmt in FIELD_MUTATORS and choice < 0.4:
+                return FIELD_MUTATORS[fmt](rng, data, seeds)
+            if fmt in ZIP_FORMATS and choice < 0.8:
+                return mutate_zip_member(rng, data, seeds)
+    except Exception:  # a mutation the writer itself cannot save: fall back to raw bytes
+        pass
+    return mutate_bytes(rng, data, seeds)
+
+
+# -- the readers, as the CLI calls them --------------------------------------------------------
+class RoundTripError(Exception):
+    """choreo accepted a file, wrote it, and refused what it wrote."""
+
+
+def read_motion_file(path: Path) -> None:
+    """`choreo convert` and `info`: read, compute positions, write BVH and NPZ; what choreo
+    writes must read back (a refusal there is a ROUNDTRIP finding)."""
+    from choreo.errors import ChoreoError
+    from choreo.formats import read_joint_positions, read_motion, write_motion
+
+    motion = read_motion(path)
+    motion.joint_positions()
+    read_joint_positions(path)  # `choreo eval`
+    for extension in (".bvh", ".npz"):
+        written = path.with_name(f"written{extension}")
+        write_motion(motion, written)
+        try:
+            read_motion(written)
+        except ChoreoError as error:
+            raise RoundTripError(f"wrote {extension}, then refused it: {error}") from None
+
+
+def read_npy_file(path: Path) -> None:
+    from choreo.formats import read_joint_positions
+
+    read_joint_positions(path)
+
+
+def read_wav_file(path: Path) -> None:
+    """`choreo info` / `generate`: decode and analyse the whole song."""
+    from choreo.music import Music
+
+    Music.from_file(path)
+
+
+def read_csv_file(path: Path) -> None:
+    """`choreo trajectory --path`: read the path and stretch it over a dance."""
+    from choreo.constraints import path_to_frames, read_root_path
+
+    path_to_frames(*read_root_path(path), 150)
+
+
+def read_sgmd_file(path: Path) -> None:
+    """`choreo generate --checkpoint`: the generator built from the file."""
+    from choreo_sgmd.generator import SGMDGenerator
+
+    SGMDGenerator(path)
+
+
+def read_repertoire_file(path: Path) -> None:
+    """`choreo graph --repertoire`: load, then what the graph reads of every clip."""
+    from choreo_graph.repertoire import Repertoire
+
+    repertoire = Repertoire.load(path)
+    repertoire.origins
+    repertoire.genre_mask("waltz")
+    for index in range(min(len(repertoire), 2)):
+        repertoire.clip_motion(index).joint_positions()
+
+
+TARGETS = {"bvh": read_motion_file, "npz": read_motion_file, "pkl": read_motion_file, "npy": read_npy_file,
+           "wav": read_wav_file, "csv": read_csv_file, "sgmd": read_sgmd_file, "repertoire": read_repertoire_file}
+
+
+def warm_up(seeds: dict[str, list[bytes]]) -> None:
+    """Import and run each reader once in the parent, so forked workers start warm (and with one
+    torch thread: a forked child must not inherit a thread pool)."""
+    import torch
+
+    torch.set_num_threads(1)
+    with tempfile.TemporaryDirectory() as folder:
+        for fmt, files in seeds.items():
+            classify(fmt, files[0], Path(folder))
+
+
+def classify(fmt: str, data: bytes, folder: Path) -> tuple[str, str]:
+    """(class, detail) of one input, run in the calling process."""
+    from choreo.errors import ChoreoError
+
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"input{EXTENSIONS[fmt]}"
+    path.write_bytes(data)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            TARGETS[fmt](path)
+        return "accepted", ""
+    except ChoreoError as error:
+        message = str(error).strip()
+        if error.exit_code in (2, 3) and message and "\n" not in message:
+            return "refused", message
+        return "INTERNAL", f"{type(error).__name__} exit {error.exit_code}: {message!r}"
+    except RoundTripError as error:
+        return "ROUNDTRIP", str(error)
+    except MemoryError:
+        return "MEMORY", "MemoryError"
+    except RecursionError:
+        return "INTERNAL", "RecursionError"
+    except Exception as error:
+        if "alloc" in str(error).lower() and "memory" in str(error).lower():
+            return "MEMORY", f"{type(error).__name__}: {str(error)[:200]}"
+        return "INTERNAL", f"{type(error).__name__}: {str(error)[:300]}\n{_where(error)}"
+
+
+def _where(error: BaseException) -> str:
+    frames = traceback.extract_tb(error.__traceback__)[-4:]
+    return " <- ".join(f"{Path(f.filename).name}:{f.lineno} {f.name}" for f in reversed(frames))
+
+
+# -- workers -----------------------------------------------------------------------------------
+def _vm_size() -> int:
+    with open("/proc/self/status") as status:
+        return int(re.search(r"VmSize:\s+(\d+)", status.read()).group(1)) * 1024
+
+
+def _worker_main(conn, memory_cap: int, folder: Path) -> None:
+    """Serve inputs until the pipe closes: classify each under an address-space cap of the
+    process's current size plus ``memory_cap``."""
+    limit = _vm_size() + memory_cap
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 1)  # readers must not print; keep the report readable if one does
+    while True:
+        try:
+            fmt, data = conn.recv()
+        except EOFError:
+            return
+        conn.send(classify(fmt, data, folder))
+
+
+@dataclass
+class Worker:
+    memory_cap: int
+    process: multiprocessing.Process | None = None
+    conn: object = None
+    folder: Path | None = None
+
+    def start(self) -> None:
+        """Fork a worker with its own scratch folder (made here, so a killed worker leaves none)."""
+        context = multiprocessing.get_context("fork")
+        parent, child = context.Pipe()
+        self.folder = Path(tempfile.mkdtemp(prefix="choreo-fuzz-"))
+        self.process = context.Process(target=_worker_main, args=(child, self.memory_cap, self.folder), daemon=True)
+        self.process.start()
+        child.close()
+        self.conn = parent
+
+    def stop(self, wait: float = 0.0) -> None:
+        """End the worker (closing its pipe first, so an idle one exits by itself) and its folder."""
+        if self.process is not None:
+            self.conn.close()
+            self.process.join(wait)
+            if self.process.is_alive():
+                self.process.kill()
+            self.process.join()
+            shutil.rmtree(self.folder, ignore_errors=True)
+        self.process = None
+
+    def submit(self, fmt: str, data: bytes) -> None:
+        if self.process is None or not self.process.is_alive():
+            self.start()
+        self.conn.send((fmt, data))
+
+
+@dataclass
+class Report:
+    counts: dict = field(default_factory=lambda: defaultdict(Counter))
+    findings: dict = field(default_factory=dict)  # signature -> (fmt, class, detail, saved path, count)
+
+    def add(self, fmt: str, cls: str, detail: str, data: bytes, folder: Path) -> None:
+        self.counts[fmt][cls] += 1
+        if cls in CLEAN:
+            return
+        signature = (fmt, cls, re.sub(r"\d+", "N", detail.splitlines()[0] if detail else "")[:100],
+                     detail.splitlines()[1] if "\n" in detail else "")
+        path = save_finding(folder, fmt, cls, detail, data)
+        previous = self.findings.get(signature)
+        self.findings[signature] = (fmt, cls, detail, previous[3] if previous else path,
+                                    (previous[4] if previous else 0) + 1)
+
+    def bad(self) -> int:
+        return sum(n for c in self.counts.values() for k, n in c.items() if k not in CLEAN)
+
+
+def save_finding(folder: Path, fmt: str, cls: str, detail: str, data: bytes) -> Path:
+    digest = hashlib.sha1(data).hexdigest()[:12]
+    path = folder / fmt / f"{cls}-{digest}{EXTENSIONS[fmt]}"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(data)
+    path.with_suffix(".txt").write_text(f"{fmt} {cls}\n{detail}\n")
+    return path
+
+
+def run(formats, inputs: int | None, seconds: float | None, seed: int, workers: int = 2, timeout: float = 10.0,
+        memory_cap: int = 1 << 30, findings: Path = DEFAULT_FINDINGS, sgmd_checkpoint=None,
+        progress=None) -> Report:
+    """Fuzz ``formats`` round-robin until ``inputs`` inputs or ``seconds`` have passed."""
+    seeds = make_seeds(formats, sgmd_checkpoint)
+    warm_up(seeds)
+    pool = [Worker(memory_cap) for _ in range(max(1, workers))]
+    report, started, index = Report(), time.monotonic(), 0
+    busy: dict[int, tuple[str, bytes, float]] = {}
+    try:
+        while True:
+            out_of_time = seconds is not None and time.monotonic() - started > seconds
+            for slot, worker in enumerate(pool):
+                if slot not in busy and not out_of_time and (inputs is None or index < inputs):
+                    fmt = formats[index % len(formats)]
+                    data = mutate(fmt, random.Random(f"{seed}:{index}"), seeds[fmt])
+                    worker.submit(fmt, data)
+                    busy[slot] = (fmt, data, time.monotonic())
+                    index += 1
+            if not busy:
+                break
+            _collect(pool, busy, report, timeout, findings)
+            if progress:
+                progress(report, index, time.monotonic() - started)
+    finally:
+        for worker in pool:
+            worker.stop(wait=2.0)
+    return report
+
+
+def _collect(pool, busy, report: Report, timeout: float, findings: Path) -> None:
+    """Wait a little for any busy worker; record its answer, or its death or overrun."""
+    multiprocessing.connection.wait([pool[s].conn for s in busy] + [pool[s].process.sentinel for s in busy], 0.05)
+    for slot in list(busy):
+        worker, (fmt, data, since) = pool[slot], busy[slot]
+        if worker.conn.poll():
+            try:
+                cls, detail = worker.conn.recv()
+            except EOFError:
+                cls, detail = "CRASH", f"worker died (exit {worker.process.exitcode})"
+                worker.stop()
+        elif not worker.process.is_alive():
+            cls, detail = "CRASH", f"worker died (exit {worker.process.exitcode})"
+            worker.stop()
+        elif time.monotonic() - since > timeout:
+            cls, detail = "HANG", f"over {timeout:g} s"
+            worker.stop()
+        else:
+            continue
+        del busy[slot]
+        report.add(fmt, cls, detail, data, findings)
+
+
+def print_report(report: Report, formats, elapsed: float, findings: Path) -> None:
+    print(f"\n{'format':<11}" + "".join(f"{c:>10}" for c in CLASSES) + f"{'total':>10}")
+    for fmt in formats:
+        counts = report.counts[fmt]
+        print(f"{fmt:<11}" + "".join(f"{counts[c]:>10}" for c in CLASSES) + f"{sum(counts.values()):>10}")
+    total = sum(sum(c.values()) for c in report.counts.values())
+    print(f"{total} inputs in {elapsed:.0f} s ({total / max(elapsed, 1e-9):.1f}/s); {report.bad()} not clean")
+    for (fmt, cls, _, _), (_, _, detail, path, count) in sorted(report.findings.items()):
+        print(f"  {cls} {fmt} x{count}: {detail.splitlines()[0][:160]}\n      {path}")
+    if report.findings:
+        print(f"findings saved under {findings}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seconds", type=float, default=None, help="stop after this long (60 s without --inputs)")
+    parser.add_argument("--inputs", type=int, default=None, help="stop after this many inputs")
+    parser.add_argument("--formats", default=",".join(FORMATS), help=f"comma list of {', '.join(FORMATS)}")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--timeout", type=float, default=10.0, help="seconds per input")
+    parser.add_argument("--memory", type=float, default=1.0, help="GiB a worker may allocate beyond its start")
+    parser.add_argument("--findings", type=Path, default=DEFAULT_FINDINGS)
+    parser.add_argument("--checkpoint", default=None, help="an SGMD checkpoint to make the .pt seed from")
+    args = parser.parse_args(argv)
+    formats = tuple(f.strip() for f in args.formats.split(",") if f.strip())
+    unknown = set(formats) - set(FORMATS)
+    if unknown:
+        parser.error(f"unknown formats {', '.join(sorted(unknown))}")
+    seconds = args.seconds if args.seconds is not None or args.inputs is not None else 60.0
+    started, last = time.monotonic(), [0.0]
+
+    def progress(report, index, elapsed):
+        if elapsed - last[0] >= 30:
+            last[0] = elapsed
+            print(f"[{elapsed:.0f} s] {index} inputs, {report.bad()} not clean", file=sys.stderr, flush=True)
+
+    report = run(formats, args.inputs, seconds, args.seed, args.workers, args.timeout, int(args.memory * (1 << 30)),
+                 args.findings, args.checkpoint, progress)
+    print_report(report, formats, time.monotonic() - started, args.findings)
+    return 1 if report.bad() else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
