@@ -108,3 +108,19 @@ def test_rest_of_another_skeleton_stands_on_the_floor():
     rest = Motion.rest(3, skeleton=small)
     assert rest.skeleton is small and rest.rotations.shape == (3, 2, 4)
     np.testing.assert_allclose(rest.joint_positions()[:, :, 1], [[0.8, 0.0]] * 3)
+
+
+def test_motion_beats_are_scipys_strict_local_minima_of_the_smoothed_speed():
+    # motion_beats no longer imports scipy.signal (1 s of start-up for every motion reader); its
+    # minima must stay argrelextrema(np.less, order=1)'s, plateaus and edges included.
+    from scipy.ndimage import gaussian_filter1d
+    from scipy.signal import argrelextrema
+
+    from choreo.motion.beats import mean_joint_speed, motion_beats
+
+    rng = np.random.default_rng(3)
+    positions = np.cumsum(rng.normal(size=(400, 24, 3)) * (rng.random((400, 1, 1)) < 0.5), axis=0) * 0.01
+    positions[100:130] = positions[100]  # a held pose: zero speed, smoothed into one bowl
+    expected = argrelextrema(gaussian_filter1d(mean_joint_speed(positions), 5.0), np.less, order=1)[0]
+    np.testing.assert_array_equal(motion_beats(positions), expected)
+    assert len(expected) > 10

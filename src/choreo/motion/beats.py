@@ -5,8 +5,6 @@ readers (M2D's music offsets) and by the beat lock; times are in frames of the m
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
-from scipy.signal import argrelextrema
 
 SPEED_SMOOTHING_SIGMA = 5.0  # frames, as in the reference code
 
@@ -18,7 +16,10 @@ def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
 
 def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:
     """Frame indices of motion beats: strict local minima (order 1) of the smoothed speed."""
+    from scipy.ndimage import gaussian_filter1d  # here: every motion reader imports this module
+
     if len(joint_positions) < 3:
         return np.zeros(0, dtype=int)
     speed = gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
-    return argrelextrema(speed, np.less, order=1)[0]
+    inner = (speed[1:-1] < speed[:-2]) & (speed[1:-1] < speed[2:])  # scipy's argrelextrema(np.less, order=1)
+    return np.flatnonzero(inner) + 1
