@@ -255,3 +255,15 @@ def test_pickle_asking_for_a_global_with_a_newline_gives_one_line(tmp_path):
     with pytest.raises(MotionFormatError) as caught:
         read_motion(path)
     assert "\n" not in str(caught.value) and "refusing to load" in str(caught.value)
+
+
+@pytest.mark.parametrize("offset", [1e305, 5e3])  # (non-finite offsets are a damaged optional entry: ignored)
+def test_npz_with_absurd_bone_offsets_is_refused_on_read(tmp_path, offset):
+    # Found by the long run (ROUNDTRIP): accepted from NPZ, written as BVH, then refused by the BVH
+    # reader. Nothing choreo accepts may be something it cannot read back.
+    arrays = smpl_arrays()
+    offsets = np.tile([0.0, 0.1, 0.0], (24, 1))
+    offsets[7] = [0.0, offset, 0.0]
+    (tmp_path / "bones.npz").write_bytes(npz_bytes(**arrays, offsets=offsets))
+    with pytest.raises(Exception, match="bone offsets must be finite and under 1000 m"):
+        read_motion(tmp_path / "bones.npz")

@@ -18,6 +18,7 @@ from ..skeleton import rotations as rot
 DEFAULT_FPS = 30.0
 MIN_FPS, MAX_FPS = 1.0, 1000.0  # outside these, a frame rate is a damaged file, not a motion
 MAX_COORDINATE = 1e5  # metres: 100 km from the origin is a damaged file, and formats lose precision beyond
+MAX_BONE = 1e3  # metres: a rest offset past this is a damaged file (and BVH's unit guess would overflow on it)
 FRAME_CHUNK = 4096  # frames converted at once where a whole song's intermediates would be large
 
 
@@ -55,6 +56,9 @@ class Motion:
             raise ParameterError(f"fps must be between {MIN_FPS:g} and {MAX_FPS:g}, got {self.fps:g}")
         if num_frames and np.abs(self.root_positions).max() > MAX_COORDINATE:
             raise ParameterError(f"root positions beyond {MAX_COORDINATE:g} m (wrong units, or a damaged file)")
+        offsets = self.skeleton.offsets
+        if not np.isfinite(offsets).all() or np.abs(offsets).max(initial=0.0) > MAX_BONE:
+            raise ParameterError(f"bone offsets must be finite and under {MAX_BONE:g} m (a damaged file?)")
         norms = np.linalg.norm(self.rotations, axis=-1, keepdims=True)
         if (norms < 1e-8).any():
             raise ParameterError("motion contains a zero quaternion")
