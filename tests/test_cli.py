@@ -203,3 +203,26 @@ def test_render_writes_an_html_preview(capsys, tmp_path):
     page = (tmp_path / "p.html").read_text()
     assert page.startswith("<!DOCTYPE html>") and "data:audio/wav;base64," in page
     assert not list(tmp_path.glob("*.tmp*"))
+
+
+def test_numpy_runtime_warnings_stay_off_stderr(capsys, monkeypatch, tmp_path):
+    # A successful run prints its result, not numpy's overflow notes; CHOREO_DEBUG shows them again.
+    import choreo.formats
+
+    write_dance(tmp_path / "d.bvh")
+    original = choreo.formats.read_motion
+
+    def noisy_read(path, *args, **kwargs):
+        np.float32(3e38) * np.float32(10)  # RuntimeWarning: overflow encountered in scalar multiply
+        return original(path, *args, **kwargs)
+
+    monkeypatch.setattr(choreo.formats, "read_motion", noisy_read)
+    import warnings
+
+    for debug, shown in (("", 0), ("1", 1)):
+        monkeypatch.setenv("CHOREO_DEBUG", debug)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            code, _, err = run_cli(capsys, "info", tmp_path / "d.bvh")
+        assert code == 0 and err == ""
+        assert sum(issubclass(w.category, RuntimeWarning) for w in caught) == shown

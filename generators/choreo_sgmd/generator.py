@@ -23,7 +23,7 @@ from .normalizer import Normalizer
 from .options import SamplingOptions
 from .sampling import Inpainting, sample_long
 from .schedule import NoiseSchedule
-from .style import Style, resolve_style
+from .style import GENRES, Style, resolve_style
 
 
 def check_weights_fit(config: ModelConfig, weights: dict, where: str = "checkpoint") -> None:
@@ -41,6 +41,16 @@ def check_weights_fit(config: ModelConfig, weights: dict, where: str = "checkpoi
         first = (missing or unexpected or wrong)[0]
         raise InputError(f"{where}: weights do not fit its configuration ({len(missing)} missing, "
                          f"{len(unexpected)} unexpected, {len(wrong)} of the wrong shape, e.g. {first})")
+
+
+def trained_genres_of(state: dict) -> tuple[str, ...] | None:
+    """The genres the checkpoint's training data held (None: not recorded, older checkpoints)."""
+    genres = state.get("trained_genres")
+    if genres is None:
+        return None
+    if not isinstance(genres, (list, tuple)) or not all(isinstance(g, str) and g in GENRES for g in genres):
+        raise InputError("trained_genres must list known genres")
+    return tuple(genres) or None
 
 
 class SGMDGenerator(Generator):
@@ -63,6 +73,7 @@ class SGMDGenerator(Generator):
             self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
             self.schedule = NoiseSchedule(self.diffusion_config)
             self.trained_steps = int(state["step"])
+            self.trained_genres = trained_genres_of(state)
         except InputError:
             raise
         except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as error:
@@ -107,7 +118,7 @@ class SGMDGenerator(Generator):
     def style_vector(self, prompt: str | None) -> tuple[torch.Tensor, Style]:
         """The (S,) vector the model reads for one prompt (zeros where no style is given) and what it
         resolved to."""
-        style = resolve_style(prompt, self.prompt_kind)
+        style = resolve_style(prompt, self.prompt_kind, known=self.trained_genres)
         if style.vector is None:
             return torch.zeros(self.model_config.style_dim), style
         return torch.from_numpy(style.vector).float(), style

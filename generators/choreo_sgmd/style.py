@@ -14,6 +14,7 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
@@ -111,21 +112,35 @@ def style_dim(kind: str) -> int:
     return len(GENRES) if kind == "onehot" else EMBEDDING_DIM
 
 
-def nearest_genre(text: str) -> str:
-    """The genre whose name or description is closest to ``text`` in embedding space."""
+def nearest_genre(text: str, among: Sequence[str] | None = None) -> str:
+    """The genre (of ``among``, default all) whose name or description is closest to ``text`` in
+    embedding space."""
     query = embed_texts([text])[0]
     tables = genre_embeddings()
     similarity = np.maximum(tables["names"] @ query, tables["descriptions"] @ query)
+    if among is not None:
+        similarity = np.where([g in among for g in GENRES], similarity, -np.inf)
     return GENRES[int(np.argmax(similarity))]
 
 
-def resolve_style(prompt: str | None, kind: str) -> Style:
+def resolve_style(prompt: str | None, kind: str, known: Sequence[str] | None = None) -> Style:
     """Turn a user's --style into the model's style vector.
 
     "waltz", "Cha Cha", "3" (one-hot index): a known genre, no encoder needed. A single unknown
     word: the nearest genre, with a notice. Longer free text: its own embedding (description and
-    name models), or the nearest genre for a one-hot model, with a notice.
+    name models), or the nearest genre for a one-hot model, with a notice. ``known``: the genres
+    the model trained on; a genre outside them is treated like an unknown word (nearest of
+    ``known``, with a notice), since the model never saw it danced.
     """
+    style = _resolve(prompt, kind)
+    if known is None or style.genre is None or style.genre in known:
+        return style
+    genre = nearest_genre(style.genre, among=known)
+    return Style(genre_vector(genre, kind), genre,
+                 f"this model never trained on {style.genre} (it knows {', '.join(known)}): using the nearest, {genre}")
+
+
+def _resolve(prompt: str | None, kind: str) -> Style:
     if prompt is None or not prompt.strip():
         return Style(None, None)
     text = prompt.strip()

@@ -124,6 +124,7 @@ class Trainer:
         return {
             "model_config": asdict(self.model_config), "diffusion_config": asdict(self.diffusion_config),
             "train_config": asdict(self.config), "genres": list(GENRES), "prompt_kind": self.config.prompt_kind,
+            "trained_genres": sorted({g for g in self.train.genres if g}),  # so --style can say what it never saw
             "state_dict": self.model.state_dict(), "ema_state_dict": self.ema.state_dict(),
             "optimizer": self.optimizer.state_dict(), "normalizer": self.normalizer.state_dict(),
             "music_scaler": self.music_scaler.state_dict(), "step": self.step, "history": self.history,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 
 from .app import app
 
@@ -17,7 +18,12 @@ def main(argv: list[str] | None = None) -> int:
     from ..errors import ChoreoError
 
     try:
-        app(args=argv, prog_name="choreo", standalone_mode=False)
+        with warnings.catch_warnings():
+            if not os.environ.get("CHOREO_DEBUG"):
+                # numpy's overflow / invalid-value notes mean nothing to a user, and what they warn of
+                # is checked where it matters (non-finite motion, audio and features are refused).
+                warnings.filterwarnings("ignore", category=RuntimeWarning)
+            app(args=argv, prog_name="choreo", standalone_mode=False)
     except ChoreoError as error:
         _print_error(str(error))
         return error.exit_code
