@@ -47,8 +47,8 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-EXTENSIONS = {"bvh": ".bvh", "npz": ".npz", "npy": ".npy", "pkl": ".pkl", "wav": ".wav", "csv": ".csv",
-              "sgmd": ".pt", "repertoire": ".npz"}  # fmt: skip
+EXTENSIONS = {"bvh": ".bvh", "npz": ".npz", "npy": ".npy", "pkl": ".pkl", "glb": ".glb", "wav": ".wav",
+              "csv": ".csv", "sgmd": ".pt", "repertoire": ".npz"}  # fmt: skip
 FORMATS = tuple(EXTENSIONS)
 ZIP_FORMATS = {"npz", "sgmd", "repertoire"}
 CLEAN = ("accepted", "refused")
@@ -72,9 +72,10 @@ def _write(motion, writer, **kwargs) -> bytes:
 
 
 def motion_seeds() -> dict[str, list[bytes]]:
-    """BVH, NPZ, NPY and AIST++ pkl seeds from choreo's own writers (pickles in several protocols)."""
+    """BVH, NPZ, NPY, AIST++ pkl and glTF seeds from choreo's own writers (pickles in several protocols)."""
     from choreo.formats.aistpp import write_aistpp_pkl
     from choreo.formats.bvh import write_bvh
+    from choreo.formats.gltf import write_glb
     from choreo.formats.npy import write_npy
     from choreo.formats.npz import write_npz
     from choreo.formats.smpl_params import motion_to_smpl_params
@@ -85,7 +86,7 @@ def motion_seeds() -> dict[str, list[bytes]]:
     pickles = [pickle.dumps(params, protocol=p) for p in (0, 2, 5)]
     return {"bvh": [_write(motion, write_bvh), _write(_small_motion(3, 1), write_bvh, units="cm")],
             "npz": [_write(motion, write_npz)], "npy": [_write(motion, write_npy)],
-            "pkl": [_write(motion, write_aistpp_pkl)] + pickles}
+            "pkl": [_write(motion, write_aistpp_pkl)] + pickles, "glb": [_write(_small_motion(3, 2), write_glb)]}
 
 
 def wav_seeds() -> list[bytes]:
@@ -487,7 +488,8 @@ def read_repertoire_file(path: Path) -> None:
         repertoire.clip_motion(index).joint_positions()
 
 
-TARGETS = {"bvh": read_motion_file, "npz": read_motion_file, "pkl": read_motion_file, "npy": read_npy_file,
+TARGETS = {"bvh": read_motion_file, "npz": read_motion_file, "pkl": read_motion_file, "glb": read_motion_file,
+           "npy": read_npy_file,
            "wav": read_wav_file, "csv": read_csv_file, "sgmd": read_sgmd_file, "repertoire": read_repertoire_file}
 
 

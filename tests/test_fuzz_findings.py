@@ -267,3 +267,28 @@ def test_npz_with_absurd_bone_offsets_is_refused_on_read(tmp_path, offset):
     (tmp_path / "bones.npz").write_bytes(npz_bytes(**arrays, offsets=offsets))
     with pytest.raises(Exception, match="bone offsets must be finite and under 1000 m"):
         read_motion(tmp_path / "bones.npz")
+
+
+@pytest.mark.parametrize("damage", [{"byteOffset": 10**9}, {"bufferView": 99}, {"count": 10**7}])
+def test_a_glb_whose_accessors_point_outside_its_buffer_is_refused(tmp_path, damage):
+    # Found by fuzzing glTF (175 of 1,500 inputs before the fix): pygltflib loads the document, and
+    # the indices and sizes inside it then fail as IndexError / ValueError while reading the dance.
+    import json
+    import struct
+
+    from choreo.formats.gltf import write_glb
+
+    buffer = io.BytesIO()
+    write_glb(motion(), buffer)
+    data = buffer.getvalue()
+    json_length = struct.unpack_from("<I", data, 12)[0]
+    document = json.loads(data[20:20 + json_length])
+    for accessor in document["accessors"]:
+        accessor.update(damage)
+    text = json.dumps(document).encode()
+    text += b" " * (-len(text) % 4)
+    rest = data[20 + json_length:]
+    body = struct.pack("<I", len(text)) + b"JSON" + text + rest
+    (tmp_path / "bad.glb").write_bytes(b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body)
+    with pytest.raises(MotionFormatError, match="glb"):
+        read_motion(tmp_path / "bad.glb")

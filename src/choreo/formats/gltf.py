@@ -208,6 +208,14 @@ def read_glb(path: str | Path) -> Motion:
         document = gl.GLTF2().load_binary(str(path))
     except Exception as error:  # pygltflib raises assorted errors on damaged files
         raise MotionFormatError(f"{path}: not a readable glb ({error})") from None
+    try:
+        return _motion_of(gl, document, path)
+    except (IndexError, KeyError, TypeError, ValueError, AttributeError) as error:  # indices and sizes a damaged file got wrong
+        raise MotionFormatError(f"{path}: damaged glb ({type(error).__name__}: {str(error)[:100]})") from None
+
+
+def _motion_of(gl, document, path) -> Motion:
+    """The dance in a loaded glb document; structural damage surfaces as Python errors, mapped above."""
     if document is None or not document.animations or document.binary_blob() is None:
         raise MotionFormatError(f"{path}: glb has no animation to read")
     by_name = {node.name: i for i, node in enumerate(document.nodes)}
