@@ -30,7 +30,7 @@ def test_mutations_are_deterministic(fuzz):
 
 
 def test_a_short_fuzz_run_finds_no_internal_error(fuzz, tiny_checkpoint, tmp_path):
-    report = fuzz.run(fuzz.FORMATS, inputs=320, seconds=None, seed=18, workers=2, timeout=10.0,
+    report = fuzz.run(fuzz.FORMATS, inputs=40 * len(fuzz.FORMATS), seconds=None, seed=18, workers=2, timeout=10.0,
                       memory_cap=1 << 30, findings=tmp_path, sgmd_checkpoint=tiny_checkpoint)
     tried = {fmt: sum(counts.values()) for fmt, counts in report.counts.items()}
     assert tried == {fmt: 40 for fmt in fuzz.FORMATS}
