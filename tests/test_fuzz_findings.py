@@ -292,3 +292,17 @@ def test_a_glb_whose_accessors_point_outside_its_buffer_is_refused(tmp_path, dam
     (tmp_path / "bad.glb").write_bytes(b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body)
     with pytest.raises(MotionFormatError, match="glb"):
         read_motion(tmp_path / "bad.glb")
+
+
+def test_a_checkpoint_config_key_with_a_newline_gives_one_line(tmp_path, tiny_checkpoint):
+    # Found by the 100,000-input run: the refusal quoted the key, newline and all, on two lines.
+    from choreo_sgmd.checkpoint import load_checkpoint, save_checkpoint
+    from choreo_sgmd.generator import SGMDGenerator
+
+    state = load_checkpoint(tiny_checkpoint)
+    state["model_config"] = {**state["model_config"], "\nstyle_mode": "none"}
+    forged = tmp_path / "forged.pt"
+    save_checkpoint(state, forged)
+    with pytest.raises(InputError, match="damaged SGMD checkpoint") as refused:
+        SGMDGenerator(forged)
+    assert "\n" not in str(refused.value)

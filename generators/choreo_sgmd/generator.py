@@ -77,7 +77,7 @@ class SGMDGenerator(Generator):
         except InputError:
             raise
         except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as error:
-            raise InputError(f"{checkpoint}: damaged SGMD checkpoint ({type(error).__name__}: {str(error)[:120]})") from None
+            raise InputError(f"{checkpoint}: damaged SGMD checkpoint ({type(error).__name__}: {' '.join(str(error).split())[:120]})") from None
 
     def music_tensor(self, features: np.ndarray) -> torch.Tensor:
         """(..., T, music_dim) standardised model input from (..., T, 35) features (per window
