@@ -1,5 +1,6 @@
 """Shared fixtures: a tiny SGMD checkpoint trained in seconds on synthetic windows."""
 
+import numpy as np
 import pytest
 import torch
 
@@ -35,3 +36,17 @@ def tiny_generator(tiny_checkpoint):
     from choreo_sgmd.generator import SGMDGenerator
 
     return SGMDGenerator(tiny_checkpoint)
+
+
+def wandering_dance(seed: int, frames: int = 40, fps: float = 30.0):
+    """A wandering, turning dance on a performer with their own proportions (not the template's):
+    what a retargeting or export test must carry over, bone by bone."""
+    from choreo.motion import Motion
+    from choreo.skeleton import SMPL24
+
+    rng = np.random.default_rng(seed)
+    axis_angle = np.cumsum(rng.normal(scale=0.08, size=(frames, 24, 3)), axis=0)
+    axis_angle[:, 0, 1] += np.linspace(0, 3 * np.pi, frames)
+    root = np.cumsum(rng.normal(scale=0.02, size=(frames, 3)), axis=0) + [0.3, 0.95, -0.2]
+    skeleton = SMPL24.with_offsets(SMPL24.offsets * rng.uniform(0.9, 1.1, size=(24, 1)))
+    return Motion.from_axis_angle(root, axis_angle, fps=fps, skeleton=skeleton)

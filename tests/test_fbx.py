@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import wandering_dance
 
 from choreo.errors import MotionFormatError, OutputError
 from choreo.formats import fbx
@@ -26,13 +27,7 @@ needs_blender = pytest.mark.skipif(blender_command() is None, reason="neither Bl
 
 @pytest.fixture(scope="module")
 def motion():
-    """A wandering, turning dance on a performer with their own proportions (not the template's)."""
-    rng = np.random.default_rng(2)
-    axis_angle = np.cumsum(rng.normal(scale=0.08, size=(FRAMES, 24, 3)), axis=0)
-    axis_angle[:, 0, 1] += np.linspace(0, 3 * np.pi, FRAMES)
-    root = np.cumsum(rng.normal(scale=0.02, size=(FRAMES, 3)), axis=0) + [0.3, 0.95, -0.2]
-    skeleton = SMPL24.with_offsets(SMPL24.offsets * rng.uniform(0.9, 1.1, size=(24, 1)))
-    return Motion.from_axis_angle(root, axis_angle, fps=FPS, skeleton=skeleton)
+    return wandering_dance(2, FRAMES, FPS)
 
 
 def blender_view(path: Path, out: Path) -> dict:

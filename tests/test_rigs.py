@@ -9,6 +9,7 @@ import io
 
 import numpy as np
 import pytest
+from conftest import wandering_dance
 
 from choreo.errors import MotionFormatError, ParameterError
 from choreo.formats import read_bvh_raw, write_bvh
@@ -29,13 +30,7 @@ MIXAMO_TREE = {  # bone: parent, Mixamo's standard humanoid without fingers
 
 @pytest.fixture(scope="module")
 def motion():
-    """A wandering, turning dance on a performer with their own proportions (not the template's)."""
-    rng = np.random.default_rng(1)
-    axis_angle = np.cumsum(rng.normal(scale=0.08, size=(FRAMES, 24, 3)), axis=0)
-    axis_angle[:, 0, 1] += np.linspace(0, 3 * np.pi, FRAMES)
-    root = np.cumsum(rng.normal(scale=0.02, size=(FRAMES, 3)), axis=0) + [0.3, 0.95, -0.2]
-    skeleton = SMPL24.with_offsets(SMPL24.offsets * rng.uniform(0.9, 1.1, size=(24, 1)))
-    return Motion.from_axis_angle(root, axis_angle, fps=FPS, skeleton=skeleton)
+    return wandering_dance(1, FRAMES, FPS)
 
 
 def written(motion, tmp_path, **options):
