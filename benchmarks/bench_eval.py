@@ -8,20 +8,15 @@ kinetic features against a literal per-frame loop of the reference definition, s
 
 from __future__ import annotations
 
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
 from choreo.metrics import Dance, MetricWarning, evaluate, kinetic_features
+from choreo.metrics.reference_loops import literal_kinetic, random_dances
 
 TARGET_SECONDS = 10.0
-
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_metrics import literal_kinetic, random_dances  # noqa: E402  (the tests' motion generator and loop)
 
 
 def main() -> None:

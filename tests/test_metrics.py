@@ -25,46 +25,10 @@ from choreo.metrics import (
 )
 from choreo.metrics.geometric import GEOMETRIC_FRAME_TIME, HIP_WIDTH, HUMERUS, SHOULDER_WIDTH, J
 from choreo.metrics.pfc import Y_UP_TO_Z_UP
+from choreo.metrics.reference_loops import literal_kinetic, random_dances
 from choreo.motion import Motion
 
 
-def random_dances(count, frames=150, seed=0):
-    rng = np.random.default_rng(seed)
-    dances = []
-    for _ in range(count):
-        axis_angle = np.cumsum(rng.normal(scale=0.05, size=(frames, 24, 3)), axis=0)
-        root = np.cumsum(rng.normal(scale=0.02, size=(frames, 3)), axis=0) + [0, 0.9, 0]
-        dances.append(Motion.from_axis_angle(root, axis_angle).joint_positions())
-    return dances
-
-
-# -- literal per-frame versions of the reference definitions, to check the vectorised ones -----
-def literal_kinetic(positions, dt=1 / 60, window=2):
-    T = len(positions)
-    out = []
-    for joint in range(24):
-        h = v = e = 0.0
-        for i in range(1, T):
-            total, count = np.zeros(3), 0
-            for j in range(-window, window + 1):
-                if i + j - 1 < 0 or i + j >= T:
-                    continue
-                total += positions[i + j, joint] - positions[i + j - 1, joint]
-                count += 1
-            velocity = total / (count * dt)
-            h += velocity[0] ** 2 + velocity[2] ** 2
-            v += velocity[1] ** 2
-            acc, count = np.zeros(3), 0
-            for j in range(-window, window + 1):
-                if i + j - 1 < 0 or i + j + 1 >= T:
-                    continue
-                later = (positions[i + j + 1, joint] - positions[i + j, joint]) / dt
-                earlier = positions[i + j, joint] - positions[i + j - 1, joint] / dt  # the reference's slip
-                acc += (later - earlier) / dt
-                count += 1
-            e += np.linalg.norm(acc / count)
-        out += [h / (T - 1), v / (T - 1), e / (T - 1)]
-    return np.array(out)
 
 
 def test_vectorised_kinetic_features_equal_the_literal_definition():
