@@ -88,3 +88,39 @@ def test_cli_refuses_constraints_for_the_graph_before_any_work(tmp_path, capsys,
     code = main(["inbetween", str(SONG), "--start", "x.bvh", "-o", str(tmp_path / "o.bvh"), "--generator", "graph"])
     err = capsys.readouterr().err
     assert code == 2 and "the graph backend does not take constraints" in err and not any(tmp_path.iterdir())
+
+
+def test_a_backend_that_listens_to_the_spectrum_gets_it_from_the_one_decode(monkeypatch):
+    # The graph reads the log-mel; it used to decode the song a second time for it.
+    import choreo.music.audio as audio
+    import choreo.music.mel as mel
+    import choreo.music.music as music_module
+
+    song = Path(__file__).resolve().parents[1] / "examples" / "drum_and_bass_174bpm.wav"
+    expected = mel.log_mel_from_file(song, 0.0, Music.from_file(song).num_frames)
+    decodes = []
+
+    def counted(*args, **kwargs):
+        decodes.append(args[0])
+        return audio.iter_audio_blocks(*args, **kwargs)
+
+    monkeypatch.setattr(music_module, "iter_audio_blocks", counted)
+    monkeypatch.setattr(mel, "iter_audio_blocks", counted)
+    analysed = Music.from_file(song, log_mel=True)
+    np.testing.assert_array_equal(analysed.log_mel, expected)  # the same frames as a decode of its own
+    assert len(decodes) == 1
+    motion = choreo.dance(song, generator="graph", finishing=Finishing(beat_lock=False))
+    assert len(decodes) == 2 and motion.num_frames == analysed.num_frames  # one more song, one more decode
+    assert load_backend("graph").listens_to_spectrum and not Music.from_file(song).log_mel
+
+
+def test_the_graph_dances_to_music_made_from_an_array():
+    from tests.test_music import click_track
+
+    from choreo.music import SAMPLE_RATE
+
+    music = Music.from_array(click_track(120.0, 8.0, SAMPLE_RATE), SAMPLE_RATE, log_mel=True)
+    assert music.log_mel.shape == (music.num_frames, 96)
+    assert choreo.dance(music, generator="graph").num_frames == music.num_frames
+    with pytest.raises(choreo.errors.ParameterError, match="needs the song's audio file"):
+        choreo.dance(Music.from_array(click_track(120.0, 8.0, SAMPLE_RATE), SAMPLE_RATE), generator="graph")

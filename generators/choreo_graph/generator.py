@@ -24,6 +24,7 @@ CHUNK_SECONDS = 32  # seconds of the song selected and warped at once (bounds me
 
 class ChoreoGraphGenerator(Generator):
     name = "graph"
+    listens_to_spectrum = True  # style and tempo encoders read the log-mel
 
     def __init__(self, model: ChoreoGraphModel, repertoire: Repertoire, config: GraphConfig = GraphConfig(),
                  names: tuple[str, str] = ("", "")):

@@ -31,6 +31,7 @@ class Generator(abc.ABC):
     """A loaded backend, ready to turn music into motion."""
 
     name: str = ""
+    listens_to_spectrum: bool = False  # True: it reads music.log_mel, analysed in the same decode as the rest
 
     @abc.abstractmethod
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> "Motion":

@@ -29,26 +29,42 @@ def _scaled_mel(samples: np.ndarray, n_mels: int) -> np.ndarray:
     return ((np.clip(db, DB_FLOOR, 0.0) - DB_FLOOR) / -DB_FLOOR).T.astype(np.float32)
 
 
-def stream_log_mel(blocks: Iterable[np.ndarray], n_mels: int = N_MELS) -> np.ndarray:
-    """Log-mel of a signal given block by block, equal to the whole-signal (centred) computation.
+class LogMelStream:
+    """Log-mel of a signal pushed block by block, equal to the whole-signal (centred) computation.
 
     Only one block plus a window of audio is held at a time, so an hour of music costs its
     (small) spectrogram, not its samples. Frame t is centred on sample t * hop, zero-padded
-    before the start and after the end like librosa's ``center=True``.
+    before the start and after the end like librosa's ``center=True``. Being a sink rather than a
+    loop, it can listen to the same decode as the other analyses (``Music.from_file(log_mel=True)``).
     """
-    half = N_FFT // 2
-    pending, done, total, out = np.zeros(half, np.float32), 0, 0, []
-    for block in blocks:
-        total += len(block)
-        pending = np.concatenate([pending, np.asarray(block, np.float32)])
-        count = (len(pending) - N_FFT) // HOP_LENGTH + 1
+
+    def __init__(self, n_mels: int = N_MELS):
+        self.n_mels = n_mels
+        self.pending = np.zeros(N_FFT // 2, np.float32)
+        self.done = self.total = 0
+        self.out: list[np.ndarray] = []
+
+    def push(self, block: np.ndarray) -> None:
+        self.total += len(block)
+        self.pending = np.concatenate([self.pending, np.asarray(block, np.float32)])
+        count = (len(self.pending) - N_FFT) // HOP_LENGTH + 1
         if count > 0:
-            out.append(_scaled_mel(pending[: (count - 1) * HOP_LENGTH + N_FFT], n_mels))
-            pending, done = pending[count * HOP_LENGTH :], done + count
-    frames_wanted = 1 + total // HOP_LENGTH
-    pending = np.concatenate([pending, np.zeros(half + N_FFT, np.float32)])
-    out.append(_scaled_mel(pending, n_mels)[: frames_wanted - done])
-    return np.concatenate(out)
+            self.out.append(_scaled_mel(self.pending[: (count - 1) * HOP_LENGTH + N_FFT], self.n_mels))
+            self.pending, self.done = self.pending[count * HOP_LENGTH:], self.done + count
+
+    def finish(self) -> np.ndarray:
+        """(1 + samples // hop, n_mels) frames of everything pushed."""
+        frames_wanted = 1 + self.total // HOP_LENGTH
+        tail = np.concatenate([self.pending, np.zeros(N_FFT // 2 + N_FFT, np.float32)])
+        return np.concatenate(self.out + [_scaled_mel(tail, self.n_mels)[: frames_wanted - self.done]])
+
+
+def stream_log_mel(blocks: Iterable[np.ndarray], n_mels: int = N_MELS) -> np.ndarray:
+    """Log-mel of a signal given block by block (see :class:`LogMelStream`)."""
+    stream = LogMelStream(n_mels)
+    for block in blocks:
+        stream.push(block)
+    return stream.finish()
 
 
 def log_mel(samples: np.ndarray, num_frames: int | None = None, n_mels: int = N_MELS) -> np.ndarray:
@@ -74,7 +90,10 @@ def log_mel_from_file(path, start: float = 0.0, num_frames: int | None = None) -
 
 
 def music_log_mel(music) -> np.ndarray:
-    """Log-mel frames aligned with ``music.features`` (decodes the song again)."""
+    """Log-mel frames aligned with ``music.features``: the ones analysed with it (``log_mel=True``),
+    else decoded again from its file."""
+    if getattr(music, "log_mel", None) is not None:
+        return music.log_mel
     if music.path is None:
         raise ParameterError("this backend listens to the spectrum and needs the song's audio file")
     return log_mel_from_file(music.path, music.start, music.num_frames)

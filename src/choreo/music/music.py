@@ -5,13 +5,15 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
 from ..errors import ParameterError
 from .audio import check_usable, iter_audio_blocks
 from .beats import BEAT_HOP, onset_envelopes
+from .mel import LogMelStream, fit_length
+from .mel import log_mel as log_mel_of
 from .features import BEAT_COLUMN, FEATURE_DIM, FPS, HOP_LENGTH, SAMPLE_RATE, assemble_features, frame_features, stream_features
 
 
@@ -28,6 +30,8 @@ class Music:
             the features' beat column marks the nearest 30 fps frames).
         tempo: estimated global tempo in beats per minute (0 when no beat was found).
         start: seconds into ``path`` at which frame 0 is (an excerpt's start).
+        log_mel: (T, 96) log-mel frames (choreo.music.mel), when asked for at analysis
+            (``log_mel=True``: the same decode feeds both); None otherwise.
     """
 
     path: Path | None
@@ -37,6 +41,7 @@ class Music:
     beat_times: np.ndarray
     tempo: float
     start: float = 0.0  # seconds into ``path`` at which frame 0 is
+    log_mel: np.ndarray | None = None  # (T, 96), for backends that listen to the spectrum
 
     @property
     def num_frames(self) -> int:
@@ -59,10 +64,11 @@ class Music:
 
     @classmethod
     def from_file(cls, path: str | os.PathLike, *, start: float | None = None, end: float | None = None,
-                  progress: Callable[[float, float], None] | None = None) -> "Music":
+                  progress: Callable[[float, float], None] | None = None, log_mel: bool = False) -> "Music":
         """Decode and featurise ``path`` (or its [start, end] seconds) in constant memory.
 
-        ``progress(done_seconds, total_seconds)`` is called as blocks are processed.
+        ``progress(done_seconds, total_seconds)`` is called as blocks are processed. ``log_mel``
+        also keeps the log-mel spectrogram, from the same decode.
         """
         path = Path(path)
         if start is not None and start < 0:
@@ -76,13 +82,17 @@ class Music:
             total = (end if end is not None else audio_duration(path)) - (start or 0.0)
             report = lambda done: progress(min(done, total), total)  # noqa: E731
         blocks = iter_audio_blocks(path, SAMPLE_RATE, start, end)
+        mel = LogMelStream() if log_mel else None
+        if mel is not None:
+            blocks = _also_into(blocks, mel)
         features, tempo, beat_times = stream_features(blocks, str(path), progress=report)
-        return cls(path=path, duration=_duration(features), fps=float(FPS),
-                   features=features, beat_times=beat_times, tempo=tempo, start=start or 0.0)
+        return cls(path=path, duration=_duration(features), fps=float(FPS), features=features, beat_times=beat_times,
+                   tempo=tempo, start=start or 0.0,
+                   log_mel=None if mel is None else fit_length(mel.finish(), len(features)))
 
     @classmethod
-    def from_array(cls, samples: np.ndarray, sr: int) -> "Music":
-        """Featurise an in-memory mono signal (tests, synthesised audio)."""
+    def from_array(cls, samples: np.ndarray, sr: int, log_mel: bool = False) -> "Music":
+        """Featurise an in-memory mono signal (tests, synthesised audio); ``log_mel`` as in from_file."""
         samples = np.asarray(samples, dtype=np.float32)
         if samples.ndim != 1:
             raise ParameterError("from_array expects a mono signal of shape (N,)")
@@ -96,7 +106,15 @@ class Music:
         envelopes = onset_envelopes(samples, SAMPLE_RATE)[:, : len(samples) // BEAT_HOP]
         features, tempo, beat_times = assemble_features(per_frame, FPS, envelopes, SAMPLE_RATE / BEAT_HOP)
         return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
-                   beat_times=beat_times, tempo=tempo)
+                   beat_times=beat_times, tempo=tempo,
+                   log_mel=log_mel_of(samples, len(features)) if log_mel else None)
+
+
+def _also_into(blocks: Iterable[np.ndarray], sink) -> Iterator[np.ndarray]:
+    """The blocks, each also pushed into ``sink``: one decode for several analyses."""
+    for block in blocks:
+        sink.push(block)
+        yield block
 
 
 def _duration(features: np.ndarray) -> float:
