@@ -306,3 +306,15 @@ def test_a_checkpoint_config_key_with_a_newline_gives_one_line(tmp_path, tiny_ch
     with pytest.raises(InputError, match="damaged SGMD checkpoint") as refused:
         SGMDGenerator(forged)
     assert "\n" not in str(refused.value)
+
+
+def test_a_protocol_2_pickle_of_an_empty_array_loads_and_bytes_n_does_not(tmp_path):
+    # Protocol 2 writes an empty array's data as a call of bytes(); the safe unpickler refused it
+    # (a false refusal, noticed while fuzzing). bytes(n) would allocate what the file asks: refused.
+    from choreo.formats.safe_pickle import UnsafePickle, load_numpy_pickle
+
+    (tmp_path / "empty.pkl").write_bytes(pickle.dumps({"smpl_poses": np.zeros((0, 72))}, protocol=2))
+    assert load_numpy_pickle(tmp_path / "empty.pkl")["smpl_poses"].shape == (0, 72)
+    (tmp_path / "bomb.pkl").write_bytes(b"\x80\x02c__builtin__\nbytes\nJ\x00\x00\x00\x40\x85R.")  # bytes(2**30)
+    with pytest.raises(UnsafePickle, match="unexpected bytes"):
+        load_numpy_pickle(tmp_path / "bomb.pkl")

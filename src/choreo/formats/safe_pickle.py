@@ -129,11 +129,20 @@ def _encode(text, encoding="utf-8"):
     return text.encode("latin1")
 
 
+def _empty_bytes(*args):
+    """Protocol 2 writes ``b""`` (an empty array's data) as a call of ``bytes()``: allowed with no
+    argument only, since ``bytes(n)`` would allocate what the file says."""
+    if args:
+        raise UnsafePickle("unexpected bytes() call")
+    return b""
+
+
 _STAND_INS = {
     ("numpy.core.multiarray", "_reconstruct"): _reconstruct, ("numpy._core.multiarray", "_reconstruct"): _reconstruct,
     ("numpy.core.multiarray", "scalar"): _scalar, ("numpy._core.multiarray", "scalar"): _scalar,
     ("numpy.core.numeric", "_frombuffer"): _frombuffer, ("numpy._core.numeric", "_frombuffer"): _frombuffer,
     ("numpy", "ndarray"): _NdarrayMarker, ("numpy", "dtype"): _DTypeRecord, ("_codecs", "encode"): _encode,
+    ("__builtin__", "bytes"): _empty_bytes, ("builtins", "bytes"): _empty_bytes,
 }  # fmt: skip
 
 
