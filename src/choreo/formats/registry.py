@@ -8,7 +8,7 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -97,9 +97,10 @@ MAGIC = ((b"PK\x03\x04", "npz"), (b"\x93NUMPY", "npy"), (b"glTF", "glb"), (b"\x8
          (b"HIERARCHY", "bvh"), (b"{", "json"))  # fmt: skip
 
 
-def read_piped_motion(format: str | None = None, stream=None) -> tuple[Path, Callable[[], None]]:
+@contextlib.contextmanager
+def piped_motion_file(format: str | None = None, stream=None) -> Iterator[Path]:
     """Motion bytes from stdin (``-``), saved to a temporary file named for their format so every
-    reader can take them as it takes a file: (path, cleanup). The format comes from ``format`` or
+    reader can take them as it takes a file; removed on exit. The format comes from ``format`` or
     from the bytes' own signature (zip, .npy, glTF, pickle, BVH, JSON)."""
     stream = sys.stdin.buffer if stream is None else stream
     data = stream.read(MAX_PIPED_BYTES + 1)
@@ -116,20 +117,17 @@ def read_piped_motion(format: str | None = None, stream=None) -> tuple[Path, Cal
             raise MotionFormatError("cannot tell the format of the motion on stdin "
                                     f"(known: {', '.join(FORMATS)}; pipe one of those)")
         chosen = FORMATS[name]
-    folder = tempfile.TemporaryDirectory(prefix="choreo-stdin-")
-    path = Path(folder.name) / f"stdin{chosen.extension}"
-    path.write_bytes(data)
-    return path, folder.cleanup
+    with tempfile.TemporaryDirectory(prefix="choreo-stdin-") as folder:
+        path = Path(folder) / f"stdin{chosen.extension}"
+        path.write_bytes(data)
+        yield path
 
 
 def read_motion(path: str | os.PathLike, format: str | None = None) -> Motion:
     """Read a motion file into a Motion (metres, Y up, the file's own fps); ``-`` reads stdin."""
     if str(path) == STDIN:
-        piped, cleanup = read_piped_motion(format)
-        try:
+        with piped_motion_file(format) as piped:
             return read_motion(piped)
-        finally:
-            cleanup()
     path = Path(path)
     chosen = _format_for(path, format, InputError)
     _check_readable(path)
@@ -148,11 +146,8 @@ def read_joint_positions(path: str | os.PathLike, format: str | None = None) -> 
     """(T, 24, 3) joint positions from any supported file, and its fps (None when unknown: .npy);
     ``-`` reads stdin."""
     if str(path) == STDIN:
-        piped, cleanup = read_piped_motion(format)
-        try:
+        with piped_motion_file(format) as piped:
             return read_joint_positions(piped)
-        finally:
-            cleanup()
     path = Path(path)
     chosen = _format_for(path, format, InputError)
     _check_readable(path)

@@ -12,8 +12,7 @@ import numpy as np
 from ..errors import ParameterError
 from .audio import check_usable, iter_audio_blocks
 from .beats import BEAT_HOP, onset_envelopes
-from .mel import LogMelStream, fit_length
-from .mel import log_mel as log_mel_of
+from .mel import LogMelStream, fit_length, log_mel as log_mel_of
 from .features import BEAT_COLUMN, FEATURE_DIM, FPS, HOP_LENGTH, SAMPLE_RATE, assemble_features, frame_features, stream_features
 
 
