@@ -10,18 +10,19 @@ from choreo.finishing.beat_lock import retimed_span
 from choreo.motion import Motion
 
 SPEEDS = r"^beat lock speeds must satisfy 0 < min <= 1 <= max, got "
-LIMITS = "^beat lock: shift and smoothing must be >= 0 and max_skip >= 1$"
+LIMITS = "^beat lock: shift, hold and ramp must be >= 0 and max_skip >= 1$"
 
 
 @pytest.mark.parametrize("settings", [dict(min_speed=1.0, max_speed=1.0), dict(max_shift_seconds=0.0),
-                                      dict(smoothing_frames=0.0), dict(max_skip=1)])
+                                      dict(hold_frames=0.0), dict(ramp_frames=0.0), dict(max_skip=1)])
 def test_beat_lock_accepts_its_boundaries(settings):
     BeatLockConfig(**settings)
 
 
 @pytest.mark.parametrize("settings, message", [
     (dict(min_speed=0.0), SPEEDS + "0.0, 1.33$"), (dict(min_speed=1.01), SPEEDS), (dict(max_speed=0.99), SPEEDS),
-    (dict(max_shift_seconds=-0.1), LIMITS), (dict(smoothing_frames=-1.0), LIMITS), (dict(max_skip=0), LIMITS),
+    (dict(max_shift_seconds=-0.1), LIMITS), (dict(hold_frames=-1.0), LIMITS), (dict(ramp_frames=-0.5), LIMITS),
+    (dict(max_skip=0), LIMITS),
 ])  # fmt: skip
 def test_beat_lock_refuses_past_them(settings, message):
     with pytest.raises(ParameterError, match=message):
