@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..motion.beats import motion_beats
-from ..motion import Motion
+from ..motion import Motion, positions_at
 
 
 @dataclass(frozen=True)
@@ -94,7 +94,7 @@ def refined_warp(joint_positions: np.ndarray, pairs: list[tuple[int, int]], fixe
     aims = targets.copy()
     best, best_hits = source, -1
     for round_ in range(config.refinements + 1):
-        miss = landed_beats(retimed_positions(joint_positions, source), targets) - targets
+        miss = landed_beats(positions_at(joint_positions, source), targets) - targets
         hits = int(np.sum(np.abs(miss) <= 1))
         if hits > best_hits:
             best, best_hits = source, hits
@@ -106,14 +106,6 @@ def refined_warp(joint_positions: np.ndarray, pairs: list[tuple[int, int]], fixe
         if speed.min() < config.min_speed - 1e-6 or speed.max() > config.max_speed + 1e-6:
             break  # an aim pushed a stretch at a span's end out of bounds: keep the best so far
     return best
-
-
-def retimed_positions(joint_positions: np.ndarray, source: np.ndarray) -> np.ndarray:
-    """(T, J, 3) joints at fractional source frames, linearly interpolated."""
-    below = np.clip(np.floor(source).astype(int), 0, len(joint_positions) - 1)
-    above = np.minimum(below + 1, len(joint_positions) - 1)
-    fraction = (source - below)[:, None, None]
-    return joint_positions[below] * (1 - fraction) + joint_positions[above] * fraction
 
 
 def landed_beats(joint_positions: np.ndarray, targets: np.ndarray) -> np.ndarray:
@@ -271,35 +263,25 @@ def stretch_progress(u: np.ndarray, length: float, source_length: float, first: 
     one constant speed (the pairs' own, within the bounds by construction)."""
     ramp = min(config.ramp_frames, length / 4)
     room = max(0.0, min(1.0, (length - 2 * ramp) / max(sum(holds), 1e-9)))  # holds that fit beside the ramps
-    for fraction in (1.0, 0.75, 0.5, 0.25, 0.0):
+    for fraction in (1.0, 0.75, 0.5, 0.25):
         hold_in, hold_out = holds[0] * room * fraction, holds[1] * room * fraction
-        ramp = ramp if fraction > 0 else 0.0
-        plateau_length = length - hold_in - hold_out - 2 * ramp
-        if plateau_length < -1e-9:
-            continue
-        plateau_length = max(plateau_length, 0.0)
+        plateau_length = max(length - hold_in - hold_out - 2 * ramp, 0.0)
         plateau = (source_length - hold_in * first - hold_out * last - ramp * (first + last) / 2) / (plateau_length + ramp)
         if config.min_speed - 1e-9 <= plateau <= config.max_speed + 1e-9:
-            return _speed_profile_integral(u, (hold_in, ramp, plateau_length, ramp, hold_out), (first, plateau, last))
+            pieces = ((hold_in, first, first), (ramp, first, plateau), (plateau_length, plateau, plateau),
+                      (ramp, plateau, last), (hold_out, last, last))
+            return _speed_profile_integral(u, pieces)
     return u * (source_length / length)
 
 
-def _speed_profile_integral(u: np.ndarray, pieces: tuple[float, ...], speeds: tuple[float, float, float]) -> np.ndarray:
-    """Integral from 0 to u of a speed that is held at a, ramps (raised cosine) to b, holds,
-    ramps to c and holds: ``pieces`` are the five lengths, ``speeds`` = (a, b, c)."""
-    a, b, c = speeds
-    ends = np.cumsum(pieces)
-    starts = ends - np.asarray(pieces)
-    done = [0.0]
-    for piece, (v0, v1) in enumerate(((a, a), (a, b), (b, b), (b, c), (c, c))):
-        done.append(done[-1] + pieces[piece] * (v0 + v1) / 2)
-    result = np.zeros_like(u)
-    for piece, (v0, v1) in enumerate(((a, a), (a, b), (b, b), (b, c), (c, c))):
-        inside = (u >= starts[piece]) & (u <= ends[piece]) if piece == 4 else (u >= starts[piece]) & (u < ends[piece])
-        x = u[inside] - starts[piece]
-        if v0 == v1 or pieces[piece] == 0:
-            result[inside] = done[piece] + v0 * x
-        else:
-            width = pieces[piece]
-            result[inside] = done[piece] + v0 * x + (v1 - v0) / 2 * (x - width / np.pi * np.sin(np.pi * x / width))
+def _speed_profile_integral(u: np.ndarray, pieces: tuple[tuple[float, float, float], ...]) -> np.ndarray:
+    """Integral from 0 to u of a speed made of consecutive ``pieces`` (length, speed at its start,
+    speed at its end), each constant or a raised-cosine ramp."""
+    result, start = np.zeros_like(u), 0.0
+    for width, v0, v1 in pieces:
+        x = np.clip(u - start, 0.0, width)  # how far into this piece
+        result += v0 * x
+        if width > 0 and v1 != v0:
+            result += (v1 - v0) / 2 * (x - width / np.pi * np.sin(np.pi * x / width))
+        start += width
     return result

@@ -108,12 +108,10 @@ def resample_positions(positions: np.ndarray, source_fps: float, target_fps: flo
     """Linear resampling of joint positions in time, keeping the duration."""
     if np.isclose(source_fps, target_fps):
         return positions
+    from ..motion import positions_at
+
     frames = max(1, int(round(len(positions) * target_fps / source_fps)))
-    times = np.clip(np.arange(frames) * source_fps / target_fps, 0, len(positions) - 1)
-    lower = np.floor(times).astype(int)
-    upper = np.minimum(lower + 1, len(positions) - 1)
-    weight = (times - lower)[:, None, None]
-    return (1 - weight) * positions[lower] + weight * positions[upper]
+    return positions_at(positions, np.arange(frames) * source_fps / target_fps)
 
 
 MOTION_EXTENSIONS = (".bvh", ".npz", ".pkl", ".json", ".npy")

@@ -3,10 +3,11 @@
 from .augment import mirrored, stretched
 from .beats import mean_joint_speed, motion_beats
 from .contacts import CONTACT_SPEED_THRESHOLD, foot_contacts
-from .motion import DEFAULT_FPS, Motion
+from .motion import DEFAULT_FPS, Motion, positions_at
 from .vector import FRAME_DIM, motion_to_vector, vector_to_motion
 
 __all__ = [
     "CONTACT_SPEED_THRESHOLD", "DEFAULT_FPS", "FRAME_DIM", "Motion", "foot_contacts",
-    "mean_joint_speed", "mirrored", "motion_beats", "motion_to_vector", "stretched", "vector_to_motion",
+    "mean_joint_speed", "mirrored", "motion_beats", "motion_to_vector", "positions_at", "stretched",
+    "vector_to_motion",
 ]  # fmt: skip

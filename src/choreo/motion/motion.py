@@ -199,3 +199,13 @@ class Motion:
         if not skeleton.same_topology(self.skeleton):
             raise ParameterError("skeletons differ in topology")
         return self.replace(skeleton=skeleton)
+
+
+def positions_at(joint_positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """(len(frames), J, 3) joints at fractional ``frames`` (clipped to the motion), linearly
+    interpolated: cheap where speeds, not rotations, are what is read."""
+    frames = np.clip(np.asarray(frames, dtype=np.float64), 0, len(joint_positions) - 1)
+    lower = np.floor(frames).astype(int)
+    upper = np.minimum(lower + 1, len(joint_positions) - 1)
+    weight = (frames - lower)[:, None, None]
+    return (1 - weight) * joint_positions[lower] + weight * joint_positions[upper]
