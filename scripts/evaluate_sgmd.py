@@ -1,6 +1,7 @@
 """Score SGMD checkpoints on the M2D test split against the train split (the reference row's setup).
 
     python scripts/evaluate_sgmd.py CHECKPOINT [CHECKPOINT ...] [--guidance 1 2] [--steps 20 50] [--no-style] [--finished]
+    python scripts/evaluate_sgmd.py CHECKPOINT --by-genre   # also one row per genre, real motion beside it
 
 One 5 s dance per test window (2.5 s stride), generated from that window's music and the clip's
 genre; one markdown row per checkpoint x guidance x steps, beside the reference row's columns.
@@ -30,31 +31,52 @@ def main() -> None:
     parser.add_argument("--guidance", type=float, nargs="+", default=[2.0])
     parser.add_argument("--steps", type=int, nargs="+", default=[50])
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--intervals", nargs="+", default=["0:1"],
+                        help="noise-level intervals LOW:HIGH (t/T) where guidance applies, e.g. 0.3:1")
     parser.add_argument("--no-style", action="store_true")
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--finished", action="store_true",
                         help="also score each dance after the beat lock (choreo.finishing), side by side")
     parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
+    parser.add_argument("--by-genre", action="store_true",
+                        help="also score each genre's windows against the train windows of that genre")
     args = parser.parse_args()
     if args.threads:
         torch.set_num_threads(args.threads)
     clips = load_dataset(args.data)
     test_clips = [c for c in clips if c.split == TEST]
-    windows, train = scoring_windows(test_clips), windows_as_dances([c for c in clips if c.split == TRAIN])
+    train_clips = [c for c in clips if c.split == TRAIN]
+    windows, train = scoring_windows(test_clips), windows_as_dances(train_clips)
     print(TABLE_HEADER.format(label="model"), flush=True)
+    if args.by_genre:
+        print_by_genre("real test motion", windows, windows_as_dances(test_clips), train_clips)
     for checkpoint in args.checkpoints:
         generator = SGMDGenerator(checkpoint)
         for guidance in args.guidance:
-            for steps in args.steps:
+            for steps, interval in [(s, i) for s in args.steps for i in args.intervals]:
                 started = time.time()
+                bounds = tuple(float(b) for b in interval.split(":"))
                 label = (f"{Path(checkpoint).name} step {generator.trained_steps}, w={guidance:g}, DDIM {steps}"
+                         + (f", guided on t/T {interval}" if bounds != (0.0, 1.0) else "")
                          + (", no style" if args.no_style else ""))
                 for finished in (False, True) if args.finished else (False,):
-                    options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed)  # same noise both times
+                    options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed, guidance_interval=bounds)  # same noise both times
                     dances = generate_window_dances(generator, windows, options, not args.no_style, finished,
                                                     args.foot_lock)
                     print(table_row(label + (", finished" if finished else ""), score(dances, train))
                           + f" <!-- {time.time() - started:.0f} s -->", flush=True)
+                    if args.by_genre:
+                        print_by_genre(label + (", finished" if finished else ""), windows, dances, train_clips)
+
+
+def print_by_genre(label: str, windows, dances, train_clips) -> None:
+    """One row per genre: that genre's windows scored against the train windows of the same genre
+    (is the gap to real motion everywhere, or in some genres?)."""
+    for genre in sorted({w.genre for w in windows}):
+        mine = [d for w, d in zip(windows, dances) if w.genre == genre]
+        reference = windows_as_dances([c for c in train_clips if c.genre == genre])
+        if len(mine) > 1 and len(reference) > 1:
+            print(table_row(f"{label} [{genre}]", score(mine, reference)), flush=True)
 
 
 if __name__ == "__main__":

@@ -124,6 +124,28 @@ def test_guidance_weight_one_is_the_conditional_prediction_and_two_extrapolates(
             torch.testing.assert_close(denoiser(x, 500), expected, atol=1e-5, rtol=1e-5)
 
 
+def test_guidance_applies_only_inside_its_interval_of_noise_levels():
+    from choreo_sgmd.guidance import GuidedDenoiser
+    from choreo_sgmd.options import SamplingOptions
+
+    model = Denoiser(TINY).eval()
+    x, _, music, style = inputs(batch=4)
+    keep_style = torch.ones(4, dtype=torch.bool)
+    interval = SamplingOptions(guidance_interval=(0.3, 0.8)).guided_steps(1000)
+    assert interval == (300, 799)  # t/T of 0.3 and 0.8 on steps 0..999
+    denoiser = GuidedDenoiser(model, music, style, keep_style, 3.0, chunk_windows=3, interval=interval)
+    with torch.no_grad():
+        for t, guided in ((299, False), (300, True), (799, True), (800, False)):
+            steps = torch.full((4,), t)
+            conditional = model(x, steps, music, style, keep_style=keep_style)
+            unconditional = model(x, steps, music, style, keep_music=torch.zeros(4, dtype=torch.bool), keep_style=keep_style)
+            expected = 3 * conditional - 2 * unconditional if guided else conditional
+            torch.testing.assert_close(denoiser(x, t), expected, atol=1e-5, rtol=1e-5)
+            assert denoiser.evaluations_at(t) == (2 if guided else 1)
+    with pytest.raises(ValueError):
+        SamplingOptions(guidance_interval=(0.8, 0.3))
+
+
 def test_normalizer_round_trip_and_range():
     frames = torch.randn(1000, 151) * 5 + 2
     normalizer = Normalizer.fit(frames)

@@ -42,11 +42,12 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]
-    windows = WindowConfig(seconds=model.window_frames / 30, stride_seconds=train_config.window_stride_seconds)
+    windows = WindowConfig(seconds=model.window_frames * model.frame_stride / 30,
+                           stride_seconds=train_config.window_stride_seconds)
     augmentation = Augmentation(mirror=train_config.mirror, stretch=train_config.stretch)
-    train_data = windows_to_tensors(train_clips, windows, prompt_kind, model.music_dim, augmentation)
-    validation = (windows_to_tensors(test_clips, WindowConfig(seconds=5, stride_seconds=2.5), prompt_kind, model.music_dim)
-                  if test_clips else None)
+    train_data = windows_to_tensors(train_clips, windows, prompt_kind, model.music_dim, augmentation, model.frame_stride)
+    validation = (windows_to_tensors(test_clips, WindowConfig(seconds=5, stride_seconds=2.5), prompt_kind, model.music_dim,
+                                     frame_stride=model.frame_stride) if test_clips else None)
     return train(model, train_config, train_data, validation, out_dir, resume=resume, diffusion_config=diffusion,
                  progress=progress)
 

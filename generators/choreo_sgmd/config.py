@@ -25,14 +25,18 @@ class ModelConfig:
     dropout: float = 0.1
     style_mode: str = "modulation"
     style_init: str = "random"
-    window_frames: int = 150  # 5 s at 30 fps
+    window_frames: int = 150  # 5 s at 30 fps (counted in model frames)
+    frame_stride: int = 1  # the model dances every stride-th 30 fps frame (2: 15 fps; frame_rate.py)
 
     def __post_init__(self):
         sizes = {name: getattr(self, name) for name in ("frame_dim", "music_dim", "style_dim", "latent_dim", "ff_dim",
-                                                        "num_layers", "num_heads", "music_layers", "window_frames")}
+                                                        "num_layers", "num_heads", "music_layers", "window_frames",
+                                                        "frame_stride")}
         bad = [f"{name}={value!r}" for name, value in sizes.items() if not isinstance(value, int) or not 0 < value <= 1 << 16]
         if bad:
             raise ValueError(f"model sizes must be whole numbers from 1 to 65536 ({', '.join(bad)})")
+        if self.frame_stride > 4:
+            raise ValueError(f"frame_stride must be 1 to 4 (30 to 7.5 fps), got {self.frame_stride}")
         if not 0.0 <= self.dropout < 1.0:
             raise ValueError(f"dropout must be in [0, 1), got {self.dropout}")
         if self.style_mode not in STYLE_MODES:
@@ -91,6 +95,8 @@ PRESETS: dict[str, ModelConfig] = {
     "paper": ModelConfig(),  # latent 512, 8 decoder layers, 8 heads: ~50 M parameters
     "small": ModelConfig(latent_dim=256, ff_dim=512, num_layers=4, num_heads=4, music_layers=1),
     "cpu": ModelConfig(latent_dim=128, ff_dim=256, num_layers=4, num_heads=4, music_layers=1),
+    "cpu15": ModelConfig(latent_dim=128, ff_dim=256, num_layers=4, num_heads=4, music_layers=1,
+                         window_frames=75, frame_stride=2),  # the cpu preset at 15 fps: 5 s windows, half the frames
     "tiny": ModelConfig(latent_dim=32, ff_dim=64, num_layers=2, num_heads=2, music_layers=1, dropout=0.0),
 }
 

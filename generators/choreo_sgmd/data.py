@@ -14,6 +14,7 @@ from choreo.errors import ParameterError
 from choreo.motion import Motion, mirrored, motion_to_vector, stretched
 from choreo.music import FEATURE_DIM, RHYTHM_DIM, rhythm_channels, stretch_features
 
+from .frame_rate import music_at_model_rate
 from .style import GENRES, canonical_genre, genre_vector
 
 
@@ -71,9 +72,11 @@ def music_input(features: np.ndarray, music_dim: int) -> np.ndarray:
 
 
 def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind: str,
-                       music_dim: int = FEATURE_DIM, augmentation: Augmentation = Augmentation()) -> WindowTensors:
+                       music_dim: int = FEATURE_DIM, augmentation: Augmentation = Augmentation(),
+                       frame_stride: int = 1) -> WindowTensors:
     """Every window of ``clips`` (and of their augmented copies) as stacked tensors; motion
-    vectors are computed once per clip and copy; rhythm channels per window, as scoring sees them."""
+    vectors are computed once per clip and copy; rhythm channels per window, as scoring sees them.
+    ``frame_stride``: windows at the model's frame rate (every stride-th frame; frame_rate.py)."""
     motions, musics, styles, has_style, genres = [], [], [], [], []
     dim = len(GENRES) if prompt_kind == "onehot" else 384
     for clip in clips:
@@ -85,8 +88,8 @@ def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind:
             vectors = motion_to_vector(motion)
             for start in window_starts(len(vectors), config):
                 stop = start + config.length
-                motions.append(vectors[start:stop])
-                musics.append(music_input(features[start:stop], music_dim))
+                motions.append(vectors[start:stop:frame_stride])
+                musics.append(music_at_model_rate(music_input(features[start:stop], music_dim), frame_stride))
                 styles.append(vector)
                 has_style.append(genre is not None)
                 genres.append(genre)

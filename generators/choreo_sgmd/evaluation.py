@@ -16,6 +16,7 @@ from choreo.metrics import Dance
 from choreo.metrics.protocol import window_dance
 from choreo.motion import Motion, vector_to_motion
 
+from .frame_rate import known_at_model_rate
 from .generator import SGMDGenerator
 from .sampling import Inpainting, SamplingOptions, sample_independent
 
@@ -34,10 +35,12 @@ def generate_window_motions(generator: SGMDGenerator, windows: Sequence, options
     inpainting, values, mask = None, None, None
     if constraints is not None:
         values, mask = (np.stack(parts) for parts in zip(*(c.frame_vectors() for c in constraints)))
-        inpainting = Inpainting(generator.normalizer.normalize(torch.from_numpy(values).float()), torch.from_numpy(mask))
+        model_values, model_mask = known_at_model_rate(values, mask, generator.model_config.frame_stride)
+        inpainting = Inpainting(generator.normalizer.normalize(torch.from_numpy(model_values).float()),
+                                torch.from_numpy(model_mask))
     x0 = sample_independent(generator.model, generator.schedule, music, styles, keep,
                             generator.model_config.frame_dim, options, inpainting)
-    vectors = generator.normalizer.denormalize(x0).numpy()
+    vectors = generator.at_full_rate(generator.normalizer.denormalize(x0).numpy(), windows[0].features.shape[0])
     if mask is not None:
         vectors[mask] = values[mask]
     return [vector_to_motion(v)[0] for v in vectors]

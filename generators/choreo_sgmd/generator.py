@@ -18,6 +18,7 @@ from choreo.motion import Motion, vector_to_motion
 from .checkpoint import load_checkpoint
 from .config import DiffusionConfig, ModelConfig
 from .data import MusicScaler, music_input
+from .frame_rate import frames_at_full_rate, known_at_model_rate, music_at_model_rate
 from .model import Denoiser
 from .normalizer import Normalizer
 from .options import SamplingOptions
@@ -80,12 +81,18 @@ class SGMDGenerator(Generator):
             raise InputError(f"{checkpoint}: damaged SGMD checkpoint ({type(error).__name__}: {' '.join(str(error).split())[:120]})") from None
 
     def music_tensor(self, features: np.ndarray) -> torch.Tensor:
-        """(..., T, music_dim) standardised model input from (..., T, 35) features (per window
-        when stacked: rhythm channels are derived from each excerpt's own beats)."""
+        """(..., Tm, music_dim) standardised model input from (..., T, 35) features at 30 fps (per
+        window when stacked: rhythm channels are derived from each excerpt's own beats); Tm frames
+        at the model's rate."""
         features = np.asarray(features)
         if features.ndim == 3:
             return torch.stack([self.music_tensor(window) for window in features])
-        return self.music_scaler(torch.from_numpy(music_input(features, self.model_config.music_dim)).float())
+        music = music_at_model_rate(music_input(features, self.model_config.music_dim), self.model_config.frame_stride)
+        return self.music_scaler(torch.from_numpy(music).float())
+
+    def at_full_rate(self, vectors: np.ndarray, num_frames: int) -> np.ndarray:
+        """Sampled frame vectors (..., Tm, D) back at 30 fps, ``num_frames`` of them."""
+        return frames_at_full_rate(vectors, self.model_config.frame_stride, num_frames)
 
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
         options = parse_options("sgmd", SamplingOptions, request.options)
@@ -100,7 +107,7 @@ class SGMDGenerator(Generator):
         music = self.music_tensor(request.music.features)
         x0, evaluations = sample_long(self.model, self.schedule, music, style, keep_style, self.model_config.frame_dim,
                                       self.model_config.window_frames, options, progress, inpainting)
-        vectors = self.normalizer.denormalize(x0).numpy()
+        vectors = self.at_full_rate(self.normalizer.denormalize(x0).numpy(), num_frames)
         if known is not None:  # exact, not merely within float32 normalisation error
             values, mask = known
             vectors[mask] = values[mask]
@@ -129,6 +136,7 @@ class SGMDGenerator(Generator):
         if schedule is None:
             vector, style = self.style_vector(prompt)
             return vector[None], style.vector is not None, [style.genre], [style.notice] if style.notice else []
+        stride = self.model_config.frame_stride
         per_frame = torch.zeros(num_frames, self.model_config.style_dim)
         keep = torch.zeros(num_frames, dtype=torch.bool)
         genres, notices = [], []
@@ -140,7 +148,7 @@ class SGMDGenerator(Generator):
                 keep[frames] = True
             genres.append(style.genre)
             notices += [style.notice] if style.notice else []
-        return per_frame, keep, genres, notices
+        return per_frame[::stride], keep[::stride], genres, notices
 
     def inpainting(self, constraints: Constraints | None, num_frames: int):
         if constraints is None or constraints.is_empty:
@@ -148,5 +156,6 @@ class SGMDGenerator(Generator):
         if constraints.num_frames != num_frames:
             raise ParameterError(f"constraints cover {constraints.num_frames} frames, the song {num_frames}")
         values, mask = constraints.frame_vectors()
-        normalised = self.normalizer.normalize(torch.from_numpy(values).float())
-        return Inpainting(normalised, torch.from_numpy(mask)), (values, mask)
+        model_values, model_mask = known_at_model_rate(values, mask, self.model_config.frame_stride)
+        normalised = self.normalizer.normalize(torch.from_numpy(model_values).float())
+        return Inpainting(normalised, torch.from_numpy(model_mask)), (values, mask)

@@ -211,6 +211,11 @@ class Conditioning:
     style_scale: torch.Tensor | None  # (B, d), Style Modulation's FC(s)
     keys_values: list[tuple[torch.Tensor, torch.Tensor]]  # per decoder layer: cross-attention keys and values
 
+    def head(self, count: int) -> "Conditioning":
+        """The first ``count`` windows' conditioning (the conditional half of a guided batch)."""
+        scale = None if self.style_scale is None else self.style_scale[:count]
+        return Conditioning(self.pooled_music[:count], scale, [(k[:count], v[:count]) for k, v in self.keys_values])
+
     @staticmethod
     def cat(parts: list["Conditioning"]) -> "Conditioning":
         scales = None if parts[0].style_scale is None else torch.cat([p.style_scale for p in parts])

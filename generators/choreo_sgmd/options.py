@@ -16,6 +16,7 @@ class SamplingOptions:
     seed: int = 0
     chunk_windows: int = 32  # windows per network call
     block_windows: int = 48  # windows denoised together (2 min of song); longer songs go block by block
+    guidance_interval: tuple[float, float] = (0.0, 1.0)  # noise levels t/T where guidance applies; elsewhere w = 1
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
 
     def __post_init__(self):
@@ -23,5 +24,14 @@ class SamplingOptions:
             raise ValueError("guidance must be >= 0 and steps >= 1")
         if self.sampler not in SAMPLERS:
             raise ValueError(f"unknown sampler {self.sampler!r} (use ddim or ddpm)")
+        object.__setattr__(self, "guidance_interval", tuple(float(b) for b in self.guidance_interval))
+        low, high = self.guidance_interval if len(self.guidance_interval) == 2 else (1.0, 0.0)
+        if not 0.0 <= low <= high <= 1.0:
+            raise ValueError(f"guidance_interval must be two noise levels 0 <= low <= high <= 1, got {self.guidance_interval}")
         if min(self.chunk_windows, self.block_windows, self.resample) < 1:
             raise ValueError("chunk_windows, block_windows and resample must be >= 1")
+
+    def guided_steps(self, timesteps: int) -> tuple[int, int]:
+        """The diffusion steps t (inclusive) inside ``guidance_interval``, for T = ``timesteps``."""
+        low, high = self.guidance_interval
+        return round(low * (timesteps - 1)), round(high * (timesteps - 1))

@@ -199,14 +199,15 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
     styles, keep = window_styles(style, keep_style, starts, window, num_frames)
     known = inpainting.windows(starts, window) if inpainting is not None else None
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
-    denoiser = GuidedDenoiser(model, music_windows, styles, keep, options.guidance, options.chunk_windows)
+    denoiser = GuidedDenoiser(model, music_windows, styles, keep, options.guidance, options.chunk_windows,
+                              interval=options.guided_steps(schedule.timesteps))
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
         if known is None:
-            evaluations += denoiser.evaluations_per_step  # per window: the cost unit of diffusion samplers
+            evaluations += denoiser.evaluations_at(t)
             x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
         else:
-            evaluations += denoiser.evaluations_per_step * options.resample
+            evaluations += denoiser.evaluations_at(t) * options.resample
             x = known.step(lambda sample: denoiser(sample, t), sampler, schedule, x, t, generator, options.resample)
         if i + 1 < len(sampler.timesteps):  # the final x0s are cross-faded by stitch() instead
             x[1:, :hop] = x[:-1, window - hop:]
@@ -225,7 +226,8 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     generator = torch.Generator().manual_seed(options.seed)
     x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
-    denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows)
+    denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
+                              interval=options.guided_steps(schedule.timesteps))
     for t in sampler.timesteps.tolist():
         if inpainting is None:
             x = sampler.step(denoiser(x, t), t, x, generator).prev_sample

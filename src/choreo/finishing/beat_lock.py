@@ -33,6 +33,9 @@ from ..motion.beats import motion_beats
 from ..motion import Motion, positions_at
 
 
+ON_TARGET_FRAMES = 1  # a locked beat counts as landed within this many frames of its music beat
+
+
 @dataclass(frozen=True)
 class BeatLockConfig:
     min_speed: float = 0.75  # the slowest local playback speed of the dance
@@ -71,10 +74,12 @@ def beat_lock(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray |
     source, pairs = lock_warp(dance_beats, np.asarray(music_beat_frames), motion.num_frames, fixed, motion.fps, config)
     if pairs and config.refinements:
         source = refined_warp(positions, pairs, fixed, source, config)
+    on_target = beats_on_target(positions_at(positions, source), pairs) if pairs else 0
     warped = motion.sample_frames(source)
     warped.root_positions[fixed] = motion.root_positions[fixed]  # exactly as given, not re-interpolated
     warped.rotations[fixed] = motion.rotations[fixed]
-    warped.metadata = dict(motion.metadata, beat_lock=f"{len(pairs)} of {len(dance_beats)} motion beats on music beats")
+    warped.metadata = dict(motion.metadata, beat_lock=f"{on_target} of {len(dance_beats)} motion beats locked within a frame of a music beat "
+                                                          f"({len(pairs)} aimed)")
     if isinstance(motion.metadata.get("clips"), list):  # a backend's timeline follows the re-timing
         warped.metadata["clips"] = [dict(clip, output_frames=retimed_span(clip["output_frames"], source))
                                     for clip in motion.metadata["clips"]]
@@ -95,7 +100,7 @@ def refined_warp(joint_positions: np.ndarray, pairs: list[tuple[int, int]], fixe
     best, best_hits = source, -1
     for round_ in range(config.refinements + 1):
         miss = landed_beats(positions_at(joint_positions, source), targets) - targets
-        hits = int(np.sum(np.abs(miss) <= 1))
+        hits = int(np.sum(np.abs(miss) <= ON_TARGET_FRAMES))
         if hits > best_hits:
             best, best_hits = source, hits
         if round_ == config.refinements or hits == len(targets):
@@ -106,6 +111,12 @@ def refined_warp(joint_positions: np.ndarray, pairs: list[tuple[int, int]], fixe
         if speed.min() < config.min_speed - 1e-6 or speed.max() > config.max_speed + 1e-6:
             break  # an aim pushed a stretch at a span's end out of bounds: keep the best so far
     return best
+
+
+def beats_on_target(joint_positions: np.ndarray, pairs: list[tuple[int, int]]) -> int:
+    """How many locked pairs' music beats have a motion beat of the re-timed joints within a frame."""
+    targets = np.array([m for _, m in pairs], dtype=np.float64)
+    return int(np.sum(np.abs(landed_beats(joint_positions, targets) - targets) <= ON_TARGET_FRAMES))
 
 
 def landed_beats(joint_positions: np.ndarray, targets: np.ndarray) -> np.ndarray:
