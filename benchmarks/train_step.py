@@ -1,6 +1,6 @@
 """Seconds per SGMD training step of each model preset, measured side by side in one run.
 
-    python benchmarks/train_step.py [--presets cpu small] [--steps 10] [--rounds 3]
+    python benchmarks/train_step.py [--presets cpu small cpu15] [--steps 10] [--rounds 3]
 
 Why: comparing presets "at the same wall-clock time" needs their step-time ratio on this CPU,
 and a ratio measured in one run survives a busy machine (a training beside it slows both
@@ -21,13 +21,14 @@ from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
 from choreo_sgmd.data import WindowTensors
 from choreo_sgmd.training import Trainer
 
-WINDOW_FRAMES = 150  # 5 s at 30 fps
 
 
 def random_windows(config, count: int = 64) -> WindowTensors:
+    """Windows of the preset's own length (150 frames at 30 fps; 75 for a 15 fps preset)."""
     generator = torch.Generator().manual_seed(0)
-    return WindowTensors(motion=torch.randn(count, WINDOW_FRAMES, config.frame_dim, generator=generator),
-                         music=torch.randn(count, WINDOW_FRAMES, config.music_dim, generator=generator),
+    frames = config.window_frames
+    return WindowTensors(motion=torch.randn(count, frames, config.frame_dim, generator=generator),
+                         music=torch.randn(count, frames, config.music_dim, generator=generator),
                          style=torch.randn(count, config.style_dim, generator=generator),
                          has_style=torch.ones(count, dtype=torch.bool))
 

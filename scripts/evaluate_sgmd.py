@@ -16,6 +16,7 @@ from pathlib import Path
 import torch
 
 from choreo.datasets import TEST, TRAIN, load_dataset
+from choreo.metrics.genre import GenreClassifier
 from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
 from choreo_sgmd.evaluation import generate_window_dances
 from choreo_sgmd.generator import SGMDGenerator
@@ -33,6 +34,8 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--intervals", nargs="+", default=["0:1"],
                         help="noise-level intervals LOW:HIGH (t/T) where guidance applies, e.g. 0.3:1")
+    parser.add_argument("--style-guidance", type=float, nargs="+", default=[1.0],
+                        help="guidance weights on the style (1: none)")
     parser.add_argument("--no-style", action="store_true")
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--finished", action="store_true",
@@ -47,24 +50,31 @@ def main() -> None:
     test_clips = [c for c in clips if c.split == TEST]
     train_clips = [c for c in clips if c.split == TRAIN]
     windows, train = scoring_windows(test_clips), windows_as_dances(train_clips)
+    train_windows = scoring_windows(train_clips)
+    classifier = GenreClassifier.fit([w.motion.joint_positions() for w in train_windows], [w.genre for w in train_windows])
+    genres = [w.genre for w in windows]
     print(TABLE_HEADER.format(label="model"), flush=True)
     if args.by_genre:
         print_by_genre("real test motion", windows, windows_as_dances(test_clips), train_clips)
     for checkpoint in args.checkpoints:
         generator = SGMDGenerator(checkpoint)
         for guidance in args.guidance:
-            for steps, interval in [(s, i) for s in args.steps for i in args.intervals]:
+            for steps, interval, style_w in [(s, i, g) for s in args.steps for i in args.intervals
+                                             for g in args.style_guidance]:
                 started = time.time()
                 bounds = tuple(float(b) for b in interval.split(":"))
                 label = (f"{Path(checkpoint).name} step {generator.trained_steps}, w={guidance:g}, DDIM {steps}"
                          + (f", guided on t/T {interval}" if bounds != (0.0, 1.0) else "")
+                         + (f", style w={style_w:g}" if style_w != 1.0 else "")
                          + (", no style" if args.no_style else ""))
                 for finished in (False, True) if args.finished else (False,):
-                    options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed, guidance_interval=bounds)  # same noise both times
+                    options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed, guidance_interval=bounds,
+                                              style_guidance=style_w)  # same noise both times
                     dances = generate_window_dances(generator, windows, options, not args.no_style, finished,
                                                     args.foot_lock)
+                    recognised = classifier.agreement([d.positions for d in dances], genres)
                     print(table_row(label + (", finished" if finished else ""), score(dances, train))
-                          + f" <!-- {time.time() - started:.0f} s -->", flush=True)
+                          + f" <!-- genre recognised {100 * recognised:.1f} %, {time.time() - started:.0f} s -->", flush=True)
                     if args.by_genre:
                         print_by_genre(label + (", finished" if finished else ""), windows, dances, train_clips)
 

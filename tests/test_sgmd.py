@@ -14,7 +14,7 @@ from choreo.music import Music
 from choreo_sgmd.checkpoint import load_checkpoint, save_checkpoint
 from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
 from choreo_sgmd.losses import diffusion_losses
-from choreo_sgmd.model import Denoiser, RotaryEmbedding, count_parameters
+from choreo_sgmd.model import Denoiser, RotaryEmbedding, count_parameters, timestep_embedding
 from choreo_sgmd.normalizer import Normalizer
 from choreo_sgmd.sampling import stitch, window_starts
 from choreo_sgmd.schedule import DDIMSampler, NoiseSchedule, make_sampler
@@ -144,6 +144,54 @@ def test_guidance_applies_only_inside_its_interval_of_noise_levels():
             assert denoiser.evaluations_at(t) == (2 if guided else 1)
     with pytest.raises(ValueError):
         SamplingOptions(guidance_interval=(0.8, 0.3))
+
+
+def test_style_guidance_adds_its_own_term_beside_music_guidance():
+    from choreo_sgmd.guidance import GuidedDenoiser
+
+    model = Denoiser(TINY).eval()
+    x, _, music, style = inputs(batch=5)
+    keep_style = torch.tensor([True, True, False, True, True])
+    steps = torch.full((5,), 400)
+    with torch.no_grad():
+        conditional = model(x, steps, music, style, keep_style=keep_style)
+        no_music = model(x, steps, music, style, keep_music=torch.zeros(5, dtype=torch.bool), keep_style=keep_style)
+        no_style = model(x, steps, music, style, keep_style=torch.zeros(5, dtype=torch.bool))
+        for guidance, style_guidance in ((2.5, 3.0), (1.0, 3.0)):
+            denoiser = GuidedDenoiser(model, music, style, keep_style, guidance, chunk_windows=2,
+                                      style_guidance=style_guidance)
+            expected = conditional + (guidance - 1) * (conditional - no_music) + (style_guidance - 1) * (conditional - no_style)
+            torch.testing.assert_close(denoiser(x, 400), expected, atol=1e-5, rtol=1e-5)
+            assert denoiser.evaluations_at(400) == (3 if guidance != 1 else 2)
+        # a window given no style has nothing to guide: its style term is zero
+        torch.testing.assert_close(denoiser(x, 400)[2], conditional[2], atol=1e-5, rtol=1e-5)
+
+
+def test_a_v_predicting_model_returns_x0_through_the_schedule():
+    from choreo_sgmd.schedule import NoiseSchedule
+
+    schedule = NoiseSchedule()
+    model = Denoiser(TINY, "v", schedule.alphas_cumprod).eval()
+    x, _, music, style = inputs(batch=2)
+    with torch.no_grad():
+        for t in (0, 500, 999):
+            steps = torch.full((2,), t)
+            conditioning = model.condition(music, style)
+            v = model.motion_out(model.final_norm(_decoded(model, x, steps, conditioning)))
+            a = schedule.alphas_cumprod[t].float()
+            torch.testing.assert_close(model.denoise(x, steps, conditioning), a.sqrt() * x - (1 - a).sqrt() * v)
+    assert float(schedule.alphas_cumprod[0]) > 0.9999  # so at t = 0 the prediction is x_t, whatever the network says
+    assert "alphas_cumprod" not in model.state_dict()  # the schedule comes from the config, not the weights
+    with pytest.raises(ValueError):
+        Denoiser(TINY, "v")
+
+
+def _decoded(model, x, steps, conditioning):
+    condition = model.time_mlp(timestep_embedding(steps, model.config.latent_dim)) + conditioning.pooled_music
+    h = model.motion_in(x)
+    for layer, keys_values in zip(model.layers, conditioning.keys_values):
+        h = layer(h, keys_values, condition, conditioning.style_scale)
+    return h
 
 
 def test_normalizer_round_trip_and_range():

@@ -10,6 +10,7 @@ from choreo.music import FEATURE_DIM, RHYTHM_DIM
 STYLE_MODES = ("modulation", "concat", "none")  # paper's Style Modulation, its concat ablation, EDGE
 STYLE_INITS = ("random", "zero")  # the style projection's initial weights (zero: the style branch starts as the identity)
 PROMPT_KINDS = ("description", "name", "onehot")  # the paper's three kinds of style prompt
+PREDICTIONS = ("x0", "v")  # what the network outputs: x0 itself (EDGE), or v, turned into x0 (model.py)
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,7 @@ class DiffusionConfig:
     timesteps: int = 1000
     cosine_offset: float = 0.008  # s in Nichol & Dhariwal's cosine schedule
     max_beta: float = 0.999
+    prediction: str = "x0"  # the network's output: "x0" (EDGE) or "v" (Salimans & Ho 2022; docs/results.md)
     music_dropout: float = 0.25  # classifier-free guidance: music replaced by a learned null
     style_dropout: float = 0.1  # so the model can also dance with no style given
     # Loss weights (EDGE's defaults): x0 reconstruction, velocity, FK joint positions, foot contact.
@@ -61,6 +63,8 @@ class DiffusionConfig:
     foot_weight: float = 10.942
 
     def __post_init__(self):
+        if self.prediction not in PREDICTIONS:
+            raise ValueError(f"prediction must be one of {PREDICTIONS}, got {self.prediction!r}")
         for name in ("music_dropout", "style_dropout"):
             if not 0.0 <= getattr(self, name) < 1.0:
                 raise ValueError(f"{name} must be in [0, 1), got {getattr(self, name)}")

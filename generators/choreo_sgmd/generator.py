@@ -68,11 +68,11 @@ class SGMDGenerator(Generator):
             self.prompt_kind = state["prompt_kind"]
             weights = state["ema_state_dict" if use_ema else "state_dict"]
             check_weights_fit(self.model_config, weights, str(checkpoint))
-            self.model = Denoiser(self.model_config).eval()
+            self.schedule = NoiseSchedule(self.diffusion_config)
+            self.model = Denoiser(self.model_config, self.diffusion_config.prediction, self.schedule.alphas_cumprod).eval()
             self.model.load_state_dict(weights)
             self.normalizer = Normalizer.from_state_dict(state["normalizer"])
             self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
-            self.schedule = NoiseSchedule(self.diffusion_config)
             self.trained_steps = int(state["step"])
             self.trained_genres = trained_genres_of(state)
         except InputError:

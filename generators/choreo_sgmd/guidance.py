@@ -19,44 +19,61 @@ CACHE_WINDOWS = 96  # about 1.4 MB of cached keys and values per window for the 
 
 
 class GuidedDenoiser:
+    """Guided x0 predictions for a set of windows.
+
+    x0 = x(c, s) + (w - 1) (x(c, s) - x(null, s)) + (w_s - 1) (x(c, s) - x(c, null)): guidance
+    on music (weight w, paper eq. 6) and, when ``style_guidance`` is not 1, on style too (the model
+    learns the style-free prediction from its style dropout). Each term's extra prediction is a
+    block of the same batch; a step outside the music guidance's interval leaves its block out.
+    """
+
     def __init__(self, model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor, guidance: float,
                  chunk_windows: int = 32, cache_windows: int = CACHE_WINDOWS,
-                 interval: tuple[int, int] | None = None):
-        """``interval`` (first, last): the diffusion steps t, inclusive, at which guidance applies
-        (None: all)."""
+                 interval: tuple[int, int] | None = None, style_guidance: float = 1.0):
+        """``interval`` (first, last): the diffusion steps t, inclusive, at which music guidance
+        applies (None: all)."""
         self.model, self.music, self.styles, self.keep_style, self.guidance = model, music, styles, keep_style, guidance
-        self.interval = interval
+        self.interval, self.style_guidance = interval, style_guidance
+        self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if style_guidance != 1.0 else [])
         self.chunks = [slice(i, min(i + chunk_windows, len(music))) for i in range(0, len(music), chunk_windows)]
         self.cached = {i: self.condition(part) for i, part in enumerate(self.chunks) if part.stop <= cache_windows}
 
     def guided_at(self, t: int) -> bool:
         return self.guidance != 1.0 and (self.interval is None or self.interval[0] <= t <= self.interval[1])
 
+    def blocks_at(self, t: int) -> list[str]:
+        return [b for b in self.blocks if b != "no music" or self.guided_at(t)]
+
     def evaluations_at(self, t: int) -> int:
         """Network evaluations per window at step t: the cost unit of diffusion samplers."""
-        return 2 if self.guided_at(t) else 1
+        return len(self.blocks_at(t))
 
     def condition(self, part: slice):
+        """The conditioning of every block, stacked block after block."""
         music, styles, keep_style = self.music[part], self.styles[part], self.keep_style[part]
-        if self.guidance == 1.0:
-            return self.model.condition(music, styles, keep_style=keep_style)
         count = len(music)
-        keep_music = torch.cat([torch.ones(count, dtype=torch.bool), torch.zeros(count, dtype=torch.bool)])
-        return self.model.condition(torch.cat([music, music]), torch.cat([styles, styles]), keep_music,
-                                    torch.cat([keep_style, keep_style]))
+        keep_music = {"conditional": True, "no music": False, "no style": True}
+        return self.model.condition(torch.cat([music] * len(self.blocks)), torch.cat([styles] * len(self.blocks)),
+                                    torch.cat([torch.full((count,), keep_music[b]) for b in self.blocks]),
+                                    torch.cat([keep_style & (b != "no style") for b in self.blocks]))
 
     @torch.no_grad()
     def __call__(self, x_t: torch.Tensor, t: int) -> torch.Tensor:
         """Guided x0 predictions (N, W, D) for noisy windows (N, W, D) at diffusion step t."""
+        active = self.blocks_at(t)
         predictions = []
         for index, part in enumerate(self.chunks):
             conditioning = self.cached.get(index) or self.condition(part)
             x = x_t[part]
-            steps = torch.full((len(x),), t, dtype=torch.long)
-            if not self.guided_at(t):
-                predictions.append(self.model.denoise(x, steps, conditioning if self.guidance == 1.0
-                                                      else conditioning.head(len(x))))
-                continue
-            conditional, unconditional = self.model.denoise(torch.cat([x, x]), torch.cat([steps, steps]), conditioning).chunk(2)
-            predictions.append(self.guidance * conditional + (1 - self.guidance) * unconditional)
+            count = len(x)
+            rows = torch.cat([torch.arange(count) + self.blocks.index(b) * count for b in active])
+            steps = torch.full((count * len(active),), t, dtype=torch.long)
+            outputs = dict(zip(active, self.model.denoise(x.repeat(len(active), 1, 1), steps,
+                                                          conditioning.rows(rows)).chunk(len(active))))
+            prediction = outputs["conditional"]
+            if "no music" in outputs:
+                prediction = prediction + (self.guidance - 1) * (outputs["conditional"] - outputs["no music"])
+            if "no style" in outputs:
+                prediction = prediction + (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
+            predictions.append(prediction)
         return torch.cat(predictions)

@@ -144,11 +144,22 @@ def timestep_embedding(t: torch.Tensor, dim: int, max_period: float = 10_000.0) 
 
 
 class Denoiser(nn.Module):
-    """x0 = f(x_t, t, music, style). Shapes: x_t (B, T, 151), t (B,), music (B, T, 35), style (B, S)."""
+    """x0 = f(x_t, t, music, style). Shapes: x_t (B, T, 151), t (B,), music (B, T, 35), style (B, S).
 
-    def __init__(self, config: ModelConfig):
+    With ``prediction="v"`` the network's output is v = sqrt(a) eps - sqrt(1 - a) x0 (a: the
+    schedule's alpha-bar at t) and is returned as x0 = sqrt(a) x_t - sqrt(1 - a) v. Why: an x0
+    network trained on 40 minutes of dance learned to ignore x_t and t and to recall x0 from the
+    music alone (at t = 50 its error was 7 x that of returning x_t itself; docs/results.md). With
+    v, a nearly clean x_t reaches the output through the first term whatever the network does.
+    """
+
+    def __init__(self, config: ModelConfig, prediction: str = "x0", alphas_cumprod: torch.Tensor | None = None):
         super().__init__()
-        self.config = config
+        self.config, self.prediction = config, prediction
+        if prediction == "v":
+            if alphas_cumprod is None:
+                raise ValueError("a v-predicting model needs its schedule's alphas_cumprod")
+            self.register_buffer("alphas_cumprod", alphas_cumprod.float(), persistent=False)  # from the config, not the weights
         d = config.latent_dim
         self.motion_in, self.motion_out = nn.Linear(config.frame_dim, d), nn.Linear(d, config.frame_dim)
         self.music_in = nn.Linear(config.music_dim, d)
@@ -196,7 +207,11 @@ class Denoiser(nn.Module):
         h = self.motion_in(x_t)
         for layer, keys_values in zip(self.layers, conditioning.keys_values):
             h = layer(h, keys_values, condition, conditioning.style_scale)
-        return self.motion_out(self.final_norm(h))
+        output = self.motion_out(self.final_norm(h))
+        if self.prediction == "x0":
+            return output
+        alpha_bar = self.alphas_cumprod[t].to(output.dtype).view(-1, 1, 1)
+        return alpha_bar.sqrt() * x_t - (1 - alpha_bar).sqrt() * output
 
     def forward(self, x_t: torch.Tensor, t: torch.Tensor, music: torch.Tensor, style: torch.Tensor,
                 keep_music: torch.Tensor | None = None, keep_style: torch.Tensor | None = None) -> torch.Tensor:
@@ -211,10 +226,12 @@ class Conditioning:
     style_scale: torch.Tensor | None  # (B, d), Style Modulation's FC(s)
     keys_values: list[tuple[torch.Tensor, torch.Tensor]]  # per decoder layer: cross-attention keys and values
 
-    def head(self, count: int) -> "Conditioning":
-        """The first ``count`` windows' conditioning (the conditional half of a guided batch)."""
-        scale = None if self.style_scale is None else self.style_scale[:count]
-        return Conditioning(self.pooled_music[:count], scale, [(k[:count], v[:count]) for k, v in self.keys_values])
+    def rows(self, index: torch.Tensor) -> "Conditioning":
+        """The conditioning of the windows at ``index`` (some blocks of a guided batch)."""
+        if len(index) == len(self.pooled_music) and bool((index == torch.arange(len(index))).all()):
+            return self
+        scale = None if self.style_scale is None else self.style_scale[index]
+        return Conditioning(self.pooled_music[index], scale, [(k[index], v[index]) for k, v in self.keys_values])
 
     @staticmethod
     def cat(parts: list["Conditioning"]) -> "Conditioning":

@@ -17,10 +17,11 @@ class SamplingOptions:
     chunk_windows: int = 32  # windows per network call
     block_windows: int = 48  # windows denoised together (2 min of song); longer songs go block by block
     guidance_interval: tuple[float, float] = (0.0, 1.0)  # noise levels t/T where guidance applies; elsewhere w = 1
+    style_guidance: float = 1.0  # classifier-free guidance weight on the style (1: none, one evaluation fewer)
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
 
     def __post_init__(self):
-        if self.guidance < 0 or self.steps < 1:
+        if self.guidance < 0 or self.style_guidance < 0 or self.steps < 1:
             raise ValueError("guidance must be >= 0 and steps >= 1")
         if self.sampler not in SAMPLERS:
             raise ValueError(f"unknown sampler {self.sampler!r} (use ddim or ddpm)")

@@ -200,7 +200,7 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
     known = inpainting.windows(starts, window) if inpainting is not None else None
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
     denoiser = GuidedDenoiser(model, music_windows, styles, keep, options.guidance, options.chunk_windows,
-                              interval=options.guided_steps(schedule.timesteps))
+                              interval=options.guided_steps(schedule.timesteps), style_guidance=options.style_guidance)
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
         if known is None:
@@ -227,7 +227,7 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
     denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
-                              interval=options.guided_steps(schedule.timesteps))
+                              interval=options.guided_steps(schedule.timesteps), style_guidance=options.style_guidance)
     for t in sampler.timesteps.tolist():
         if inpainting is None:
             x = sampler.step(denoiser(x, t), t, x, generator).prev_sample

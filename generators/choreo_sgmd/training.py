@@ -49,12 +49,12 @@ class Trainer:
             raise ValueError(f"batch size {train_config.batch_size} does not split over {world} processes")
         self.model_config, self.diffusion_config, self.config = model_config, diffusion_config, train_config
         self.device, self.rank, self.world = device or torch.device("cpu"), rank, world
-        self.model = Denoiser(model_config).to(self.device)
+        self.schedule = NoiseSchedule(diffusion_config)
+        self.model = Denoiser(model_config, diffusion_config.prediction, self.schedule.alphas_cumprod).to(self.device)
         self.network = self.model if world == 1 else DistributedDataParallel(self.model)
         self.ema = copy.deepcopy(self.model).eval().requires_grad_(False)
         self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=train_config.learning_rate,
                                            weight_decay=train_config.weight_decay)
-        self.schedule = NoiseSchedule(diffusion_config)
         self.normalizer = Normalizer.fit(train.motion.reshape(-1, train.motion.shape[-1])).to(self.device)
         self.music_scaler = MusicScaler.fit(train.music).to(self.device)
         self.train, self.validation = train, validation

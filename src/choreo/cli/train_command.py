@@ -14,7 +14,7 @@ def train(
     generator: str = typer.Argument(..., help="Backend to train, e.g. sgmd (see choreo generators)."),
     data: Path = typer.Option(..., help="Dataset folder: M2D, AIST++ or BVH files with audio beside them."),
     out: Path = typer.Option(..., help="Folder for checkpoints (last.pt is rewritten atomically)."),
-    config: str = typer.Option("cpu", help="Model configuration: cpu (default), small, paper, tiny."),
+    config: str = typer.Option("cpu", help="Model configuration: cpu (default), cpu15 (the cpu model at 15 fps), small, paper, tiny."),
     steps: Optional[int] = typer.Option(None, help="Train until this many optimiser steps (graph: steps of each of its three stages)."),
     batch_size: Optional[int] = typer.Option(None, help="Windows per step (default 32)."),
     prompt: str = typer.Option("description", help="Style prompt kind: description, name or onehot."),
@@ -27,6 +27,7 @@ def train(
     stretch: Optional[str] = typer.Option(None, help="sgmd: paces to also train at, music stretched along (default 0.85,1,1.18; 1 = off)."),
     genre_balance: Optional[float] = typer.Option(None, help="sgmd: 0 draws windows uniformly, 1 draws every genre equally (default 0.5)."),
     rhythm: Optional[bool] = typer.Option(None, "--rhythm/--no-rhythm", help="sgmd: feed beat phase and tempo to the model (default on)."),
+    prediction: Optional[str] = typer.Option(None, help="sgmd: what the network predicts, x0 (default) or v."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
@@ -56,7 +57,7 @@ def train(
         except ValueError:
             raise ParameterError(f"--stretch wants comma-separated numbers such as 0.85,1,1.18, got {stretch!r}") from None
     sgmd_extras = {k: v for k, v in {"mirror": mirror, "stretch": paces, "genre_balance": genre_balance,
-                                     "rhythm": rhythm}.items() if v is not None}
+                                     "rhythm": rhythm, "prediction": prediction}.items() if v is not None}
     with progress_bar(f"training {generator}") as update:
         def report(p):
             extra = f"loss {p.loss:.4f}" + (f", validation {p.validation_loss:.4f}" if p.validation_loss is not None else "")
