@@ -7,7 +7,10 @@ Each row is a fresh process (median of ``--repeats``), timed as wall seconds and
 "as before" rows run the same command in a process that first imports the two librosa modules the
 music analysis used to load (``librosa.beat``, whose numba kernel is compiled in every process,
 and ``librosa.decompose``, which imports scikit-learn); their ratio to the row above is what
-choreo's own beat tracker and HPSS (``choreo.music.beats``) saved.
+choreo's own beat tracker and HPSS (``choreo.music.beats``) saved. Since the third session of
+2026-12-02 commands that need only the rhythm (``info song``, ``render``, ``eval``) and ChoreoGraph
+analyse songs without MFCC and chroma and never import librosa; their "as before" rows first pay
+for what every analysis used to: librosa's chroma (a constant-Q transform) and mel spectrogram.
 """
 
 from __future__ import annotations
@@ -25,6 +28,9 @@ from common import write_song
 
 CLI = "import sys; {imports}from choreo.cli import main; sys.exit(main(sys.argv[1:]))"
 AS_BEFORE = "import librosa.beat, librosa.decompose; "
+TIMBRE = ("import numpy, librosa; y = numpy.random.rand(30720).astype('float32'); "
+          "librosa.feature.chroma_cens(y=y, sr=15360); librosa.feature.melspectrogram(y=y, sr=15360); "
+          "librosa.onset.onset_detect(onset_envelope=numpy.random.rand(64)); ")
 
 
 def run_once(args: list[str], imports: str = "") -> tuple[float, float]:
@@ -57,9 +63,11 @@ def main() -> None:
             ("choreo --help", ["--help"], ""),
             ("choreo info dance.bvh", ["info", dance], ""),
             ("choreo info song.wav (music analysis)", ["info", song], ""),
-            ("  as before", ["info", song], AS_BEFORE),
+            ("  as before", ["info", song], AS_BEFORE + TIMBRE),
             ("choreo generate 60 s song", ["generate", song, "-o", dance], ""),
             ("  as before", ["generate", song, "-o", dance], AS_BEFORE),
+            ("choreo graph 60 s song", ["graph", song, "-o", dance], ""),
+            ("  as before", ["graph", song, "-o", dance], AS_BEFORE + TIMBRE),
         ]
         print("| command | wall (s) | CPU (s) | CPU / row above |")
         print("| --- | ---: | ---: | ---: |")

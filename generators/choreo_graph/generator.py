@@ -25,6 +25,7 @@ CHUNK_SECONDS = 32  # seconds of the song selected and warped at once (bounds me
 class ChoreoGraphGenerator(Generator):
     name = "graph"
     listens_to_spectrum = True  # style and tempo encoders read the log-mel
+    reads_timbre = False  # ... and nothing else of the music (its beats go to the beat lock)
 
     def __init__(self, model: ChoreoGraphModel, repertoire: Repertoire, config: GraphConfig = GraphConfig(),
                  names: tuple[str, str] = ("", "")):

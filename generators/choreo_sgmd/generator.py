@@ -101,6 +101,9 @@ class SGMDGenerator(Generator):
         if options.sampler == "ddpm" and request.options.get("steps") is None:
             options = replace(options, steps=self.diffusion_config.timesteps)
 
+        if not request.music.timbre:
+            raise ParameterError("sgmd reads the music's MFCC and chroma: analyse the song with them "
+                                 "(Music.from_file(path), not timbre=False)")
         num_frames = request.music.num_frames
         style, keep_style, genres, notices = self.style_conditioning(request.style, num_frames, request.music.fps)
         inpainting, known = self.inpainting(request.constraints, num_frames)

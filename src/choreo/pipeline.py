@@ -99,7 +99,8 @@ def dance(
     backend = load_backend(generator, checkpoint) if isinstance(generator, str) else generator
     check_request(backend.name, options or {}, constraints is not None)  # before the song is analysed
     music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress,
-                                                                  log_mel=backend.listens_to_spectrum)
+                                                                  log_mel=backend.listens_to_spectrum,
+                                                                  timbre=backend.reads_timbre)
     fixed = constraints(music) if callable(constraints) else constraints
     request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
     motion = backend.generate(request, progress=progress)

@@ -42,7 +42,7 @@ def info(
         from ..music import Music
 
         with progress_bar(f"analysing {path.name}") as update:
-            music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)))
+            music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)), timbre=False)
         table.add_row("kind", "audio")
         table.add_row("duration", f"{music.duration:.2f} s")
         table.add_row("tempo", f"{music.tempo:.1f} bpm")

@@ -39,7 +39,7 @@ def _load_dances(files: list[Path], fps: float, up: str, music_dir: Path | None,
         audio = _find_music(path, music_dir)
         beats = None
         if audio is not None:
-            music = Music.from_file(audio)
+            music = Music.from_file(audio, timbre=False)
             beats = np.round(music.beat_times * fps).astype(int)
             beats = beats[beats < len(positions)]
         dances.append(Dance(path.stem, positions, beats))

@@ -284,7 +284,8 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         check_output_format(path, settings.format, settings.rig)  # every output checked before any work or any file
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)),
-                                log_mel=backend.listens_to_spectrum)  # one decode for every analysis
+                                log_mel=backend.listens_to_spectrum,  # one decode for every analysis
+                                timbre=backend.reads_timbre)
     constraints = build_constraints(music) if build_constraints else None
     given = {"steps": settings.steps, "guidance": settings.guidance, "sampler": settings.sampler}
     options = {name: value for name, value in given.items() if value is not None}  # the rest: the backend's defaults

@@ -40,7 +40,7 @@ def render(
         if music is not None:
             from ..music import Music
 
-            beats = (Music.from_file(music).beat_times * dance.fps).round().astype(int)
+            beats = (Music.from_file(music, timbre=False).beat_times * dance.fps).round().astype(int)
         render_plot(plot, dance, output, beats)
     elif Path(output).suffix.lower() == ".html":
         render_html(dance, output, music)
@@ -80,6 +80,6 @@ def render_html(motion, output: str, music: Path | None) -> None:
     if music is not None:
         from ..music import Music
 
-        beats = Music.from_file(music).beat_times
+        beats = Music.from_file(music, timbre=False).beat_times
     with atomic_output(output, binary=True) as handle:
         write_html_preview(motion, music, beats, handle)

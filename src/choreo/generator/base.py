@@ -32,6 +32,7 @@ class Generator(abc.ABC):
 
     name: str = ""
     listens_to_spectrum: bool = False  # True: it reads music.log_mel, analysed in the same decode as the rest
+    reads_timbre: bool = True  # False: it needs only the rhythm (and log-mel), so MFCC and chroma are skipped
 
     @abc.abstractmethod
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> "Motion":

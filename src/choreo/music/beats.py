@@ -17,9 +17,12 @@ harmonic/percussive separation of the mel spectrogram) is stronger between the b
 
 from __future__ import annotations
 
-import librosa
+import math
+
 import numpy as np
 import scipy.ndimage
+
+from .spectrum import mel_power, onset_strength, power_to_db
 
 BEAT_HOP = 160  # samples at 15360 Hz: 96 envelope frames per second
 ENVELOPE_MELS = 64
@@ -40,8 +43,7 @@ ENVELOPE_LATENCY = 1  # frames the envelope's peak trails an onset (10 ms, measu
 def onset_envelopes(samples: np.ndarray, sr: int) -> np.ndarray:
     """(2, H) onset strength at sr / BEAT_HOP frames per second: of the whole mix and of its
     percussive part. Frame h describes time h * BEAT_HOP / sr (centred analysis)."""
-    mel = librosa.feature.melspectrogram(y=samples, sr=sr, n_fft=ENVELOPE_FFT, hop_length=BEAT_HOP,
-                                         n_mels=ENVELOPE_MELS, fmax=ENVELOPE_FMAX)
+    mel = mel_power(samples, sr, ENVELOPE_FFT, BEAT_HOP, ENVELOPE_MELS, ENVELOPE_FMAX)
     percussive = percussive_part(mel)
     return np.stack([_onset_strength(mel, sr), _onset_strength(percussive, sr)]).astype(np.float32)
 
@@ -63,8 +65,8 @@ def percussive_part(power: np.ndarray, kernel: tuple[int, int] = HPSS_KERNEL) ->
 
 
 def _onset_strength(mel_power: np.ndarray, sr: int) -> np.ndarray:
-    log_mel = librosa.power_to_db(mel_power, ref=1.0, amin=1e-10, top_db=None)  # fixed floor: blocks agree
-    return librosa.onset.onset_strength(S=log_mel, sr=sr, hop_length=BEAT_HOP, n_fft=ENVELOPE_FFT, lag=ONSET_LAG)
+    log_mel = power_to_db(mel_power)  # fixed floor: blocks agree
+    return onset_strength(log_mel, ENVELOPE_FFT, BEAT_HOP, lag=ONSET_LAG)
 
 
 def envelope_autocorrelation(envelope: np.ndarray, fps: float) -> np.ndarray:
@@ -221,9 +223,36 @@ def beat_frames_at(beat_times: np.ndarray, fps: float, num_frames: int, keep: bo
 
 
 def onset_peaks(onset_envelope: np.ndarray, fps: float) -> np.ndarray:
-    """Frame indices of onset peaks (librosa's peak picking on the normalised envelope)."""
-    if not np.asarray(onset_envelope).any():
+    """Frame indices of onset peaks: librosa.onset.onset_detect's rule (tested equal), on the
+    envelope scaled to [0, 1]: a frame is a peak if it is the maximum from 30 ms before it to
+    itself and at least 0.07 above the mean from 100 ms before to 100 ms after."""
+    envelope = np.asarray(onset_envelope, dtype=np.float64)
+    if not envelope.any() or not np.isfinite(envelope).all():
         return np.zeros(0, dtype=int)
-    peaks = librosa.onset.onset_detect(onset_envelope=np.asarray(onset_envelope, dtype=np.float64),
-                                       sr=fps * 512, hop_length=512, units="frames")
+    envelope = envelope - envelope.min()
+    envelope /= envelope.max() + np.finfo(envelope.dtype).tiny
+    frames = lambda seconds: math.ceil(seconds * fps * 512 // 512)  # noqa: E731  (librosa's seconds * sr // hop, sr = fps * hop)
+    return pick_peaks(envelope, frames(0.03), frames(0.0) + 1, frames(0.10), frames(0.10) + 1, 0.07, frames(0.03))
+
+
+def pick_peaks(x: np.ndarray, pre_max: int, post_max: int, pre_avg: int, post_avg: int, delta: float,
+               wait: int) -> np.ndarray:
+    """Frames n with x[n] = max(x[n - pre_max : n + post_max]) and x[n] >= mean(x[n - pre_avg :
+    n + post_avg]) + delta (windows cut at the ends), at least ``wait`` frames after the previous
+    peak (librosa.util.peak_pick). Every frame is tested at once; only the spacing is sequential."""
+    count = len(x)
+    index = np.arange(count)
+    lows, highs = np.maximum(index - pre_max, 0), np.minimum(index + post_max, count)
+    is_max = np.array([x[n] == x[lo:hi].max() for n, lo, hi in zip(index, lows, highs)]) if count else np.zeros(0, bool)
+    sums = np.concatenate([[0.0], np.cumsum(x)])
+    lows, highs = np.maximum(index - pre_avg, 0), np.minimum(index + post_avg, count)
+    above = x >= (sums[highs] - sums[lows]) / (highs - lows) + delta
+    if count:  # librosa tests the first frame against the windows after it alone
+        is_max[0] = x[0] >= x[: min(post_max, count)].max()
+        above[0] = x[0] >= x[: min(post_avg, count)].mean() + delta
+    peaks, next_allowed = [], 0
+    for n in np.flatnonzero(is_max & above):
+        if n >= next_allowed:
+            peaks.append(n)
+            next_allowed = n + wait + 1
     return np.asarray(peaks, dtype=int)

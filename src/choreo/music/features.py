@@ -20,12 +20,12 @@ import warnings
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
-import librosa
 import numpy as np
 
 from ..errors import AudioError
 from .audio import MIN_DURATION, SILENCE_RMS
 from .beats import BEAT_HOP, beat_frames_at, estimate_beats, onset_envelopes, onset_peaks
+from .spectrum import mel_power, mfcc, onset_strength, power_to_db
 
 FPS = 30
 HOP_LENGTH = 512
@@ -53,31 +53,37 @@ class BlockConfig:
     context_frames: int = 30 * 4  # extra frames of audio on each side; CQT and CENS reach ~1.6 s
 
 
-def frame_features(samples: np.ndarray, sr: int = SAMPLE_RATE, hop_length: int = HOP_LENGTH) -> np.ndarray:
+def frame_features(samples: np.ndarray, sr: int = SAMPLE_RATE, hop_length: int = HOP_LENGTH,
+                   timbre: bool = True) -> np.ndarray:
     """(F, 33) onset envelope, MFCC and chroma_cens for centred frames at every ``hop_length``.
 
-    F = 1 + len(samples) // hop_length, as librosa frames a signal with center=True.
+    F = 1 + len(samples) // hop_length, as librosa frames a signal with center=True. Without
+    ``timbre`` the MFCC and chroma columns are zeros and librosa is never imported (seconds saved
+    in a fresh process by commands that need only the rhythm: render, eval, ChoreoGraph).
     """
     with warnings.catch_warnings():  # librosa warns on the short final block; padding handles it
         warnings.filterwarnings("ignore", message="n_fft=.* is too large")
-        return _frame_features(samples, sr, hop_length)
+        return _frame_features(samples, sr, hop_length, timbre)
 
 
-def _frame_features(samples: np.ndarray, sr: int, hop_length: int) -> np.ndarray:
-    mel = librosa.feature.melspectrogram(y=samples, sr=sr, hop_length=hop_length)
-    log_mel = librosa.power_to_db(mel, ref=1.0, amin=1e-10, top_db=None)
-    onset = librosa.onset.onset_strength(S=log_mel, sr=sr, hop_length=hop_length)
-    mfcc = librosa.feature.mfcc(S=log_mel, sr=sr, n_mfcc=N_MFCC)
+def _frame_features(samples: np.ndarray, sr: int, hop_length: int, timbre: bool) -> np.ndarray:
+    log_mel = power_to_db(mel_power(samples, sr, 2048, hop_length, 128))  # librosa's melspectrogram defaults
+    onset = onset_strength(log_mel, 2048, hop_length)
+    if not timbre:
+        return np.concatenate([onset[:, None], np.zeros((len(onset), N_MFCC + N_CHROMA))], axis=1).astype(np.float32)
+    import librosa  # only the chroma needs it (a constant-Q transform); its first use costs seconds
+
+    cepstrum = mfcc(log_mel, N_MFCC)
     chroma = librosa.feature.chroma_cens(y=samples, sr=sr, hop_length=hop_length, tuning=0.0, n_chroma=N_CHROMA)
-    frames = min(onset.shape[-1], mfcc.shape[-1], chroma.shape[-1])
-    return np.concatenate([onset[None, :frames], mfcc[:, :frames], chroma[:, :frames]], axis=0).T.astype(np.float32)
+    frames = min(onset.shape[-1], cepstrum.shape[-1], chroma.shape[-1])
+    return np.concatenate([onset[None, :frames], cepstrum[:, :frames], chroma[:, :frames]], axis=0).T.astype(np.float32)
 
 
 class _BlockFeaturizer:
     """Consumes audio blocks of any size; emits per-frame features for finished frame ranges."""
 
-    def __init__(self, config: BlockConfig, hop_length: int, sr: int):
-        self.config, self.hop, self.sr = config, hop_length, sr
+    def __init__(self, config: BlockConfig, hop_length: int, sr: int, timbre: bool = True):
+        self.config, self.hop, self.sr, self.timbre = config, hop_length, sr, timbre
         self.buffer = np.zeros(0, np.float32)
         self.buffer_start = 0  # global sample index of buffer[0]
         self.next_frame = 0  # first frame not yet emitted
@@ -122,7 +128,7 @@ class _BlockFeaturizer:
         window = self.buffer[first_sample - self.buffer_start: last_sample - self.buffer_start]
         # Left of the song there is nothing: librosa's zero padding there matches the whole-song case.
         # In the middle, frames are centred on samples inside the window, so context makes them exact.
-        features = frame_features(window, self.sr, self.hop)
+        features = frame_features(window, self.sr, self.hop, self.timbre)
         self._emit_envelopes(window, first_sample, self.total_samples if final else stop_frame * self.hop)
         offset = (self.next_frame * self.hop - first_sample) // self.hop
         block = features[offset: offset + stop_frame - self.next_frame]
@@ -135,12 +141,14 @@ class _BlockFeaturizer:
 
 def stream_features(blocks: Iterable[np.ndarray], name: str, sr: int = SAMPLE_RATE, hop_length: int = HOP_LENGTH,
                     config: BlockConfig = BlockConfig(),
-                    progress: Callable[[float], None] | None = None) -> tuple[np.ndarray, float, np.ndarray]:
+                    progress: Callable[[float], None] | None = None,
+                    timbre: bool = True) -> tuple[np.ndarray, float, np.ndarray]:
     """Featurise a stream of mono blocks at ``sr``.
 
     Returns (features (T, 35) float32, tempo in bpm, beat times in seconds), T = samples // hop_length.
+    ``timbre=False``: MFCC and chroma columns left at zero (frame_features).
     """
-    featurizer = _BlockFeaturizer(config, hop_length, sr)
+    featurizer = _BlockFeaturizer(config, hop_length, sr, timbre)
     parts: list[np.ndarray] = []
     for block in blocks:
         parts.extend(featurizer.push(block))

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from typing import Iterable
 
-import librosa
 import numpy as np
 
 from ..errors import ParameterError
 from .audio import iter_audio_blocks
 from .features import HOP_LENGTH, SAMPLE_RATE
+from .spectrum import mel_power, power_to_db
 
 N_MELS = 96
 N_FFT = 2048
@@ -23,9 +23,7 @@ DB_FLOOR = -80.0  # dB below full scale: where silence is clipped (values are th
 
 def _scaled_mel(samples: np.ndarray, n_mels: int) -> np.ndarray:
     """Frames of ``samples`` taken every hop from sample 0 (no centring), as (T, n_mels) in [0, 1]."""
-    mel = librosa.feature.melspectrogram(y=samples, sr=SAMPLE_RATE, n_fft=N_FFT, hop_length=HOP_LENGTH,
-                                         n_mels=n_mels, center=False)
-    db = librosa.power_to_db(mel, ref=1.0, amin=1e-10, top_db=None)
+    db = power_to_db(mel_power(samples, SAMPLE_RATE, N_FFT, HOP_LENGTH, n_mels, center=False))
     return ((np.clip(db, DB_FLOOR, 0.0) - DB_FLOOR) / -DB_FLOOR).T.astype(np.float32)
 
 

@@ -31,6 +31,9 @@ class Music:
         start: seconds into ``path`` at which frame 0 is (an excerpt's start).
         log_mel: (T, 96) log-mel frames (choreo.music.mel), when asked for at analysis
             (``log_mel=True``: the same decode feeds both); None otherwise.
+        timbre: whether the features' MFCC and chroma columns were computed (``timbre=False`` at
+            analysis leaves them at zero: commands and backends that read only the rhythm and
+            the log-mel skip the constant-Q transform, and librosa, entirely).
     """
 
     path: Path | None
@@ -41,6 +44,7 @@ class Music:
     tempo: float
     start: float = 0.0  # seconds into ``path`` at which frame 0 is
     log_mel: np.ndarray | None = None  # (T, 96), for backends that listen to the spectrum
+    timbre: bool = True  # False: MFCC and chroma columns are zeros (analysed for rhythm only)
 
     @property
     def num_frames(self) -> int:
@@ -63,11 +67,13 @@ class Music:
 
     @classmethod
     def from_file(cls, path: str | os.PathLike, *, start: float | None = None, end: float | None = None,
-                  progress: Callable[[float, float], None] | None = None, log_mel: bool = False) -> "Music":
+                  progress: Callable[[float, float], None] | None = None, log_mel: bool = False,
+                  timbre: bool = True) -> "Music":
         """Decode and featurise ``path`` (or its [start, end] seconds) in constant memory.
 
         ``progress(done_seconds, total_seconds)`` is called as blocks are processed. ``log_mel``
-        also keeps the log-mel spectrogram, from the same decode.
+        also keeps the log-mel spectrogram, from the same decode; ``timbre=False`` skips the MFCC
+        and chroma columns (see the class).
         """
         path = Path(path)
         if start is not None and start < 0:
@@ -84,14 +90,14 @@ class Music:
         mel = LogMelStream() if log_mel else None
         if mel is not None:
             blocks = _also_into(blocks, mel)
-        features, tempo, beat_times = stream_features(blocks, str(path), progress=report)
+        features, tempo, beat_times = stream_features(blocks, str(path), progress=report, timbre=timbre)
         return cls(path=path, duration=_duration(features), fps=float(FPS), features=features, beat_times=beat_times,
                    tempo=tempo, start=start or 0.0,
-                   log_mel=None if mel is None else fit_length(mel.finish(), len(features)))
+                   log_mel=None if mel is None else fit_length(mel.finish(), len(features)), timbre=timbre)
 
     @classmethod
-    def from_array(cls, samples: np.ndarray, sr: int, log_mel: bool = False) -> "Music":
-        """Featurise an in-memory mono signal (tests, synthesised audio); ``log_mel`` as in from_file."""
+    def from_array(cls, samples: np.ndarray, sr: int, log_mel: bool = False, timbre: bool = True) -> "Music":
+        """Featurise an in-memory mono signal (tests, synthesised audio); options as in from_file."""
         samples = np.asarray(samples, dtype=np.float32)
         if samples.ndim != 1:
             raise ParameterError("from_array expects a mono signal of shape (N,)")
@@ -101,12 +107,12 @@ class Music:
             samples = soxr.resample(samples, sr, SAMPLE_RATE).astype(np.float32)
         check_usable(samples, SAMPLE_RATE, "audio array")
         num_frames = len(samples) // HOP_LENGTH
-        per_frame = frame_features(samples)[:num_frames]
+        per_frame = frame_features(samples, timbre=timbre)[:num_frames]
         envelopes = onset_envelopes(samples, SAMPLE_RATE)[:, : len(samples) // BEAT_HOP]
         features, tempo, beat_times = assemble_features(per_frame, FPS, envelopes, SAMPLE_RATE / BEAT_HOP)
         return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
                    beat_times=beat_times, tempo=tempo,
-                   log_mel=log_mel_of(samples, len(features)) if log_mel else None)
+                   log_mel=log_mel_of(samples, len(features)) if log_mel else None, timbre=timbre)
 
 
 def _also_into(blocks: Iterable[np.ndarray], sink) -> Iterator[np.ndarray]:
