@@ -5,6 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+import torch.nn.functional as F
 
 from conftest import synthetic_windows
 
@@ -184,6 +185,41 @@ def test_a_v_predicting_model_returns_x0_through_the_schedule():
     assert "alphas_cumprod" not in model.state_dict()  # the schedule comes from the config, not the weights
     with pytest.raises(ValueError):
         Denoiser(TINY, "v")
+
+
+def test_preconditioning_with_a_data_scale_keeps_clean_input_and_v_at_scale_one():
+    from choreo_sgmd.schedule import NoiseSchedule
+
+    schedule = NoiseSchedule()
+    model = Denoiser(TINY, "v", schedule.alphas_cumprod, sigma_data=0.5).eval()
+    x, _, music, style = inputs(batch=2)
+    with torch.no_grad():
+        conditioning = model.condition(music, style)
+        for t in (3, 400, 999):
+            steps = torch.full((2,), t)
+            raw = model.motion_out(model.final_norm(_decoded(model, x, steps, conditioning)))
+            a = schedule.alphas_cumprod[t].double()
+            variance = (1 - a) / a
+            skip, out = 0.25 / (variance + 0.25), (variance * 0.25 / (variance + 0.25)).sqrt()
+            expected = (skip * x.double() / a.sqrt() - out * raw.double()).float()
+            torch.testing.assert_close(model.denoise(x, steps, conditioning), expected, rtol=1e-4, atol=1e-4)
+
+
+def test_min_snr_weights_and_weighted_losses():
+    from choreo_sgmd.losses import diffusion_losses, snr_weights
+
+    alpha_bar = torch.tensor([0.99, 0.5, 0.01])
+    torch.testing.assert_close(snr_weights(alpha_bar, 5.0), torch.tensor([5.0, 1.0, 0.01 / 0.99]))
+    normalizer = Normalizer.fit(torch.randn(500, 151))
+    predicted, target = torch.randn(3, 10, 151), torch.randn(3, 10, 151)
+    plain = diffusion_losses(predicted, target, normalizer)
+    ones = diffusion_losses(predicted, target, normalizer, torch.ones(3))
+    only_first = diffusion_losses(predicted, target, normalizer, torch.tensor([3.0, 0.0, 0.0]))
+    alone = diffusion_losses(predicted[:1], target[:1], normalizer)
+    for name in ("reconstruction", "velocity", "joints", "foot"):
+        torch.testing.assert_close(getattr(ones, name), getattr(plain, name))
+        torch.testing.assert_close(getattr(only_first, name), getattr(alone, name))  # 3 x (1 of 3 windows)
+    torch.testing.assert_close(plain.reconstruction, F.mse_loss(predicted, target))
 
 
 def _decoded(model, x, steps, conditioning):

@@ -18,7 +18,9 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
                        style_mode: str | None = None, style_init: str | None = None, style_dropout: float | None = None,
                        checkpoint_every: int | None = None, seed: int | None = None, mirror: bool | None = None,
                        stretch: tuple[float, ...] | None = None, genre_balance: float | None = None,
-                       rhythm: bool | None = None, prediction: str | None = None, progress=None,
+                       rhythm: bool | None = None, prediction: str | None = None, snr_gamma: float | None = None,
+                       sigma_data: float | None = None,
+                       progress=None,
                        load_progress=None) -> Path:
     """Train on a dataset folder (M2D, AIST++ or BVH+audio): its train split, validated on its test split."""
     from dataclasses import replace
@@ -39,7 +41,8 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
     model_overrides = {"style_mode": style_mode, "style_init": style_init,
                        "music_dim": FEATURE_DIM if rhythm is False else None}
     model = model_config(config, style_dim=style_dim(prompt_kind), **{k: v for k, v in model_overrides.items() if v})
-    diffusion_overrides = {"style_dropout": style_dropout, "prediction": prediction}
+    diffusion_overrides = {"style_dropout": style_dropout, "prediction": prediction, "snr_gamma": snr_gamma,
+                           "sigma_data": sigma_data}
     diffusion = DiffusionConfig(**{k: v for k, v in diffusion_overrides.items() if v is not None})
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]

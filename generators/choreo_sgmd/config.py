@@ -54,6 +54,8 @@ class DiffusionConfig:
     cosine_offset: float = 0.008  # s in Nichol & Dhariwal's cosine schedule
     max_beta: float = 0.999
     prediction: str = "x0"  # the network's output: "x0" (EDGE) or "v" (Salimans & Ho 2022; docs/results.md)
+    sigma_data: float = 1.0  # with prediction "v": the data's standard deviation the skip assumes (1: plain v)
+    snr_gamma: float = 0.0  # > 0: weigh each window's loss by min(SNR(t), snr_gamma) (min-SNR); 0: uniform
     music_dropout: float = 0.25  # classifier-free guidance: music replaced by a learned null
     style_dropout: float = 0.1  # so the model can also dance with no style given
     # Loss weights (EDGE's defaults): x0 reconstruction, velocity, FK joint positions, foot contact.
@@ -63,6 +65,10 @@ class DiffusionConfig:
     foot_weight: float = 10.942
 
     def __post_init__(self):
+        if not 0 < self.sigma_data <= 10:
+            raise ValueError(f"sigma_data must be in (0, 10], got {self.sigma_data}")
+        if self.snr_gamma < 0:
+            raise ValueError(f"snr_gamma must be >= 0, got {self.snr_gamma}")
         if self.prediction not in PREDICTIONS:
             raise ValueError(f"prediction must be one of {PREDICTIONS}, got {self.prediction!r}")
         for name in ("music_dropout", "style_dropout"):

@@ -69,7 +69,8 @@ class SGMDGenerator(Generator):
             weights = state["ema_state_dict" if use_ema else "state_dict"]
             check_weights_fit(self.model_config, weights, str(checkpoint))
             self.schedule = NoiseSchedule(self.diffusion_config)
-            self.model = Denoiser(self.model_config, self.diffusion_config.prediction, self.schedule.alphas_cumprod).eval()
+            self.model = Denoiser(self.model_config, self.diffusion_config.prediction, self.schedule.alphas_cumprod,
+                                  self.diffusion_config.sigma_data).eval()
             self.model.load_state_dict(weights)
             self.normalizer = Normalizer.from_state_dict(state["normalizer"])
             self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])

@@ -40,14 +40,29 @@ def joint_positions(vectors: torch.Tensor) -> torch.Tensor:
     return forward_kinematics_torch(rotations, vectors[..., ROOT_SLICE], offsets, SMPL24.parents)
 
 
-def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: Normalizer) -> LossTerms:
-    """predicted and target x0 in normalised space, (B, T, 151)."""
-    reconstruction = F.mse_loss(predicted, target)
-    velocity = F.mse_loss(predicted[:, 1:] - predicted[:, :-1], target[:, 1:] - target[:, :-1])
+def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: Normalizer,
+                     weights: torch.Tensor | None = None) -> LossTerms:
+    """predicted and target x0 in normalised space, (B, T, 151); ``weights`` (B,) weigh each
+    window's terms (min-SNR weighting: ``snr_weights``), uniform when None."""
+    reconstruction = _per_window(F.mse_loss(predicted, target, reduction="none"))
+    velocity = _per_window(F.mse_loss(predicted[:, 1:] - predicted[:, :-1], target[:, 1:] - target[:, :-1], reduction="none"))
     predicted_motion, target_motion = normalizer.denormalize(predicted), normalizer.denormalize(target)
     predicted_joints, target_joints = joint_positions(predicted_motion), joint_positions(target_motion)
-    joints = F.mse_loss(predicted_joints, target_joints)
+    joints = _per_window(F.mse_loss(predicted_joints, target_joints, reduction="none"))
     feet_velocity = predicted_joints[:, 1:, list(FOOT_JOINTS)] - predicted_joints[:, :-1, list(FOOT_JOINTS)]
     in_contact = (predicted_motion[:, :-1, CONTACT_SLICE] > CONTACT_THRESHOLD).to(predicted.dtype)
-    foot = (feet_velocity.pow(2).sum(-1) * in_contact).mean()  # no gradient through the contact mask
-    return LossTerms(reconstruction, velocity, joints, foot)
+    foot = _per_window(feet_velocity.pow(2).sum(-1) * in_contact)  # no gradient through the contact mask
+    weigh = (lambda term: term.mean()) if weights is None else (lambda term: (term * weights).mean())  # noqa: E731
+    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot))
+
+
+def _per_window(values: torch.Tensor) -> torch.Tensor:
+    return values.flatten(1).mean(1)
+
+
+def snr_weights(alpha_bar: torch.Tensor, gamma: float) -> torch.Tensor:
+    """min(SNR(t), gamma) per window (Hang et al., "Efficient Diffusion Training via Min-SNR
+    Weighting Strategy", 2023, for an x0 loss). Why here: an unweighted x0 loss is dominated by
+    the high-noise steps, where the best guess is an average dance, and says little about the
+    low-noise steps that decide a sample's last details (docs/results.md)."""
+    return torch.clamp(alpha_bar / (1 - alpha_bar), max=gamma)

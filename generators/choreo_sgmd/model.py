@@ -146,16 +146,20 @@ def timestep_embedding(t: torch.Tensor, dim: int, max_period: float = 10_000.0) 
 class Denoiser(nn.Module):
     """x0 = f(x_t, t, music, style). Shapes: x_t (B, T, 151), t (B,), music (B, T, 35), style (B, S).
 
-    With ``prediction="v"`` the network's output is v = sqrt(a) eps - sqrt(1 - a) x0 (a: the
-    schedule's alpha-bar at t) and is returned as x0 = sqrt(a) x_t - sqrt(1 - a) v. Why: an x0
-    network trained on 40 minutes of dance learned to ignore x_t and t and to recall x0 from the
-    music alone (at t = 50 its error was 7 x that of returning x_t itself; docs/results.md). With
-    v, a nearly clean x_t reaches the output through the first term whatever the network does.
+    With ``prediction="v"`` the network's output v is turned into x0 = c_skip x - c_out v, where
+    x = x_t / sqrt(a) is the noisy motion at unit scale (a: the schedule's alpha-bar at t), sigma^2
+    = (1 - a) / a its noise, c_skip = s^2 / (sigma^2 + s^2) and c_out = sigma s / sqrt(sigma^2 + s^2)
+    for a data standard deviation s (Karras et al. 2022's preconditioning; s = 1 is Salimans and
+    Ho's v-prediction, x0 = sqrt(a) x_t - sqrt(1 - a) v). Why: an x0 network trained on
+    40 minutes of dance learned to ignore x_t and t and to recall x0 from the music alone (at t = 50
+    its error was 7 x that of returning x_t itself; docs/results.md). Here a nearly clean x_t
+    reaches the output through the skip whatever the network does.
     """
 
-    def __init__(self, config: ModelConfig, prediction: str = "x0", alphas_cumprod: torch.Tensor | None = None):
+    def __init__(self, config: ModelConfig, prediction: str = "x0", alphas_cumprod: torch.Tensor | None = None,
+                 sigma_data: float = 1.0):
         super().__init__()
-        self.config, self.prediction = config, prediction
+        self.config, self.prediction, self.sigma_data = config, prediction, sigma_data
         if prediction == "v":
             if alphas_cumprod is None:
                 raise ValueError("a v-predicting model needs its schedule's alphas_cumprod")
@@ -211,7 +215,9 @@ class Denoiser(nn.Module):
         if self.prediction == "x0":
             return output
         alpha_bar = self.alphas_cumprod[t].to(output.dtype).view(-1, 1, 1)
-        return alpha_bar.sqrt() * x_t - (1 - alpha_bar).sqrt() * output
+        variance, data = (1 - alpha_bar) / alpha_bar, self.sigma_data**2  # sigma^2 and s^2
+        skip = data / (variance + data)
+        return skip * x_t / alpha_bar.sqrt() - (variance * data / (variance + data)).sqrt() * output
 
     def forward(self, x_t: torch.Tensor, t: torch.Tensor, music: torch.Tensor, style: torch.Tensor,
                 keep_music: torch.Tensor | None = None, keep_style: torch.Tensor | None = None) -> torch.Tensor:

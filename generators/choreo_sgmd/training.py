@@ -26,7 +26,7 @@ from choreo.generator import TrainProgress
 from .checkpoint import load_checkpoint, save_checkpoint
 from .config import DiffusionConfig, ModelConfig, TrainConfig
 from .data import MusicScaler, WindowTensors
-from .losses import diffusion_losses
+from .losses import diffusion_losses, snr_weights
 from .model import Denoiser
 from .normalizer import Normalizer
 from .schedule import NoiseSchedule
@@ -50,7 +50,8 @@ class Trainer:
         self.model_config, self.diffusion_config, self.config = model_config, diffusion_config, train_config
         self.device, self.rank, self.world = device or torch.device("cpu"), rank, world
         self.schedule = NoiseSchedule(diffusion_config)
-        self.model = Denoiser(model_config, diffusion_config.prediction, self.schedule.alphas_cumprod).to(self.device)
+        self.model = Denoiser(model_config, diffusion_config.prediction, self.schedule.alphas_cumprod,
+                              diffusion_config.sigma_data).to(self.device)
         self.network = self.model if world == 1 else DistributedDataParallel(self.model)
         self.ema = copy.deepcopy(self.model).eval().requires_grad_(False)
         self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=train_config.learning_rate,
@@ -79,7 +80,9 @@ class Trainer:
     def loss(self, model, x0, music, t, noise, keep_music, keep_style, style) -> torch.Tensor:
         x_t = self.schedule.q_sample(x0, t, noise)
         predicted = model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style)
-        return diffusion_losses(predicted, x0, self.normalizer).total(self.diffusion_config)
+        gamma = self.diffusion_config.snr_gamma
+        weights = snr_weights(self.schedule.alpha_bar(t).to(x0.dtype), gamma) if gamma else None
+        return diffusion_losses(predicted, x0, self.normalizer, weights).total(self.diffusion_config)
 
     def train_step(self) -> float:
         generator = _step_generator(self.config.seed, self.step)

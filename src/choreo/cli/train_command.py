@@ -28,6 +28,8 @@ def train(
     genre_balance: Optional[float] = typer.Option(None, help="sgmd: 0 draws windows uniformly, 1 draws every genre equally (default 0.5)."),
     rhythm: Optional[bool] = typer.Option(None, "--rhythm/--no-rhythm", help="sgmd: feed beat phase and tempo to the model (default on)."),
     prediction: Optional[str] = typer.Option(None, help="sgmd: what the network predicts, x0 (default) or v."),
+    sigma_data: Optional[float] = typer.Option(None, help="sgmd with --prediction v: the data's standard deviation the skip assumes (default 1)."),
+    snr_gamma: Optional[float] = typer.Option(None, help="sgmd: weigh each window's loss by min(SNR, this) (min-SNR; default 0: off)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
@@ -57,7 +59,9 @@ def train(
         except ValueError:
             raise ParameterError(f"--stretch wants comma-separated numbers such as 0.85,1,1.18, got {stretch!r}") from None
     sgmd_extras = {k: v for k, v in {"mirror": mirror, "stretch": paces, "genre_balance": genre_balance,
-                                     "rhythm": rhythm, "prediction": prediction}.items() if v is not None}
+                                     "rhythm": rhythm, "prediction": prediction, "snr_gamma": snr_gamma,
+                                     "sigma_data": sigma_data}.items()
+                   if v is not None}
     with progress_bar(f"training {generator}") as update:
         def report(p):
             extra = f"loss {p.loss:.4f}" + (f", validation {p.validation_loss:.4f}" if p.validation_loss is not None else "")
