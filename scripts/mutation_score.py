@@ -54,6 +54,7 @@ AREAS: dict[str, Area] = {
     "formats": Area(("src/choreo/formats/*",),
                     ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py", "tests/test_format_edges.py"),
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
+    "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/test_spectrum.py",)),
     "finishing": Area(("src/choreo/finishing/*",),
                       ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
