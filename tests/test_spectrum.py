@@ -86,3 +86,26 @@ def test_sgmd_refuses_music_analysed_without_timbre(tiny_generator):
     music = Music.from_array(np.tile(_song(2.0), 3), SR, timbre=False)
     with pytest.raises(ParameterError, match="MFCC and chroma"):
         tiny_generator.generate(GenerationRequest(music))
+
+
+def test_the_mel_scale_equals_librosa_on_both_sides_of_1_khz():
+    from choreo.music.spectrum import _hz_to_mel, _mel_to_hz
+
+    hz = np.array([0.0, 10.0, 440.0, 999.0, 1000.0, 1001.0, 4000.0, 7680.0])
+    np.testing.assert_allclose(_hz_to_mel(hz), librosa.hz_to_mel(hz), rtol=1e-12, atol=1e-12)
+    mel = np.linspace(0.0, 45.0, 19)
+    np.testing.assert_allclose(_mel_to_hz(mel), librosa.mel_to_hz(mel), rtol=1e-12, atol=1e-9)
+    mel_filterbank.cache_clear()  # built again here, from the functions above (not from a cached copy)
+    np.testing.assert_allclose(mel_filterbank(SR, 512, 40, 20.0, 6000.0),
+                               librosa.filters.mel(sr=SR, n_fft=512, n_mels=40, fmin=20.0, fmax=6000.0), rtol=1e-5, atol=1e-8)
+
+
+def test_outputs_are_float32_whatever_the_input_and_edges_are_exact():
+    y = _song(0.5).astype(np.float64)
+    assert power_spectrogram(y, 512, 128).dtype == np.float32
+    assert power_spectrogram(y[:10], 512, 128, center=False).dtype == np.float32
+    exact = power_spectrogram(y[:512], 512, 128, center=False)  # a signal exactly one window long: one frame
+    np.testing.assert_allclose(exact, np.abs(librosa.stft(y[:512].astype(np.float32), n_fft=512, hop_length=128, center=False)) ** 2,
+                               rtol=2e-4, atol=1e-6)
+    log_mel = power_to_db(mel_power(y, SR, 512, 128, 40))
+    assert log_mel.dtype == np.float32 and onset_strength(log_mel, 512, 128).dtype == np.float32
