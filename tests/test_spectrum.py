@@ -91,7 +91,7 @@ def test_sgmd_refuses_music_analysed_without_timbre(tiny_generator):
 def test_the_mel_scale_equals_librosa_on_both_sides_of_1_khz():
     from choreo.music.spectrum import _hz_to_mel, _mel_to_hz
 
-    hz = np.array([0.0, 10.0, 440.0, 999.0, 1000.0, 1001.0, 4000.0, 7680.0])
+    hz = np.array([0.0, 10.0, 440.0, 999.0, 1000.0, 1000.5, 1001.0, 4000.0, 7680.0])
     np.testing.assert_allclose(_hz_to_mel(hz), librosa.hz_to_mel(hz), rtol=1e-12, atol=1e-12)
     mel = np.linspace(0.0, 45.0, 19)
     np.testing.assert_allclose(_mel_to_hz(mel), librosa.mel_to_hz(mel), rtol=1e-12, atol=1e-9)
@@ -109,3 +109,12 @@ def test_outputs_are_float32_whatever_the_input_and_edges_are_exact():
                                rtol=2e-4, atol=1e-6)
     log_mel = power_to_db(mel_power(y, SR, 512, 128, 40))
     assert log_mel.dtype == np.float32 and onset_strength(log_mel, 512, 128).dtype == np.float32
+
+
+def test_defaults_are_librosas():
+    y = _song(0.5)
+    centred = np.abs(librosa.stft(y, n_fft=512, hop_length=128, pad_mode="constant")) ** 2
+    np.testing.assert_allclose(power_spectrogram(y, 512, 128), centred, rtol=2e-4, atol=1e-6 * centred.max())
+    log_mel = power_to_db(mel_power(y, SR, 512, 128, 40))
+    np.testing.assert_allclose(onset_strength(log_mel, 512, 128), librosa.onset.onset_strength(S=log_mel, sr=SR, hop_length=128, n_fft=512),
+                               rtol=1e-5, atol=1e-5)  # lag 1
