@@ -124,3 +124,25 @@ def test_motion_beats_are_scipys_strict_local_minima_of_the_smoothed_speed():
     expected = argrelextrema(gaussian_filter1d(mean_joint_speed(positions), 5.0), np.less, order=1)[0]
     np.testing.assert_array_equal(motion_beats(positions), expected)
     assert len(expected) > 10
+
+
+def test_a_stop_exactly_between_two_frames_is_one_motion_beat():
+    """Positions (t - 20)^2 along x: the speeds of steps 19 -> 20 and 20 -> 21 tie at the bottom.
+    The strict reference rule finds no beat there (or one, by rounding luck); choreo finds one,
+    at the first of the two (speed index 19, the reference's indexing)."""
+    from scipy.signal import argrelextrema
+
+    from choreo.motion.beats import motion_beats
+
+    t = np.arange(41, dtype=np.float64)
+    positions = np.zeros((41, 1, 3))
+    positions[:, 0, 0] = 0.01 * (t - 20) ** 2
+    assert motion_beats(positions, sigma=1e-3).tolist() == [19]
+    speed = np.linalg.norm(np.diff(positions, axis=0), axis=-1).mean(-1)
+    assert speed[19] == speed[20] and argrelextrema(speed, np.less)[0].tolist() == []
+    # without ties the rule is the reference's
+    wiggle = np.random.default_rng(0).normal(size=(300, 24, 3)).cumsum(0) * 0.01
+    from scipy.ndimage import gaussian_filter1d
+
+    smoothed = gaussian_filter1d(np.linalg.norm(np.diff(wiggle, axis=0), axis=-1).mean(-1), 5.0)
+    assert motion_beats(wiggle).tolist() == argrelextrema(smoothed, np.less)[0].tolist()

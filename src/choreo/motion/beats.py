@@ -1,4 +1,4 @@
-"""Motion beats: the moments a dancer nearly stops (strict local minima of the mean joint speed
+"""Motion beats: the moments a dancer nearly stops (local minima of the mean joint speed
 after Gaussian smoothing). Motion analysis, used by the metrics (BeatAlign), by the dataset
 readers (M2D's music offsets) and by the beat lock; times are in frames of the motion's rate."""
 
@@ -15,11 +15,17 @@ def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
 
 
 def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:
-    """Frame indices of motion beats: strict local minima (order 1) of the smoothed speed."""
+    """Frame indices of motion beats: local minima (order 1) of the smoothed speed.
+
+    Strict on the left, not on the right: a minimum shared by two equal frames (a dancer who
+    stops exactly between two frames: the speed is symmetric about the stop) counts once, at its
+    first frame. The reference's strict test (scipy's argrelextrema with np.less) finds no beat
+    there at all, or one, depending on the last bit of rounding; on any other speed curve the
+    two agree."""
     from scipy.ndimage import gaussian_filter1d  # here: every motion reader imports this module
 
     if len(joint_positions) < 3:
         return np.zeros(0, dtype=int)
     speed = gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
-    inner = (speed[1:-1] < speed[:-2]) & (speed[1:-1] < speed[2:])  # scipy's argrelextrema(np.less, order=1)
+    inner = (speed[1:-1] < speed[:-2]) & (speed[1:-1] <= speed[2:])
     return np.flatnonzero(inner) + 1

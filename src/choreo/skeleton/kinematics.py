@@ -1,20 +1,16 @@
-"""Batched forward kinematics, in torch (differentiable, for training losses) and numpy."""
+"""Batched forward kinematics, written once for torch tensors (differentiable, for training
+losses) and numpy arrays (without importing torch)."""
 
 from __future__ import annotations
 
 from typing import Sequence
 
 import numpy as np
-import torch
+from array_api_compat import array_namespace
 
 
-def forward_kinematics_torch(
-    local_rotmats: torch.Tensor,
-    root_positions: torch.Tensor,
-    offsets: torch.Tensor,
-    parents: Sequence[int],
-) -> torch.Tensor:
-    """Joint positions from local rotations.
+def forward_kinematics_torch(local_rotmats, root_positions, offsets, parents: Sequence[int]):
+    """Joint positions from local rotations (tensors or arrays: the kind given is returned).
 
     Args:
         local_rotmats: (..., J, 3, 3) rotation of each joint relative to its parent.
@@ -25,9 +21,10 @@ def forward_kinematics_torch(
     Returns:
         (..., J, 3) world positions.
     """
-    offsets = offsets.to(local_rotmats.dtype).expand(local_rotmats.shape[:-2] + (3,))
-    global_rots: list[torch.Tensor] = []
-    positions: list[torch.Tensor] = []
+    xp = array_namespace(local_rotmats, root_positions, offsets)
+    offsets = xp.broadcast_to(xp.astype(offsets, local_rotmats.dtype), tuple(local_rotmats.shape[:-2]) + (3,))
+    global_rots: list = []
+    positions: list = []
     for j, p in enumerate(parents):
         if p < 0:
             global_rots.append(local_rotmats[..., j, :, :])
@@ -35,7 +32,7 @@ def forward_kinematics_torch(
         else:
             global_rots.append(global_rots[p] @ local_rotmats[..., j, :, :])
             positions.append(positions[p] + (global_rots[p] @ offsets[..., j, :, None])[..., 0])
-    return torch.stack(positions, dim=-2)
+    return xp.stack(positions, axis=-2)
 
 
 def forward_kinematics(
@@ -45,13 +42,8 @@ def forward_kinematics(
     parents: Sequence[int],
 ) -> np.ndarray:
     """numpy twin of :func:`forward_kinematics_torch` (same shapes), computed in float64."""
-    positions = forward_kinematics_torch(
-        torch.from_numpy(np.asarray(local_rotmats, dtype=np.float64)),
-        torch.from_numpy(np.asarray(root_positions, dtype=np.float64)),
-        torch.from_numpy(np.asarray(offsets, dtype=np.float64)),
-        parents,
-    )
-    return positions.numpy()
+    as64 = lambda a: np.asarray(a, dtype=np.float64)  # noqa: E731
+    return forward_kinematics_torch(as64(local_rotmats), as64(root_positions), as64(offsets), parents)
 
 
 def global_rotations(local_rotmats: np.ndarray, parents: Sequence[int]) -> np.ndarray:
