@@ -11,6 +11,8 @@ choreo's own beat tracker and HPSS (``choreo.music.beats``) saved. Since the thi
 2026-12-02 commands that need only the rhythm (``info song``, ``render``, ``eval``) and ChoreoGraph
 analyse songs without MFCC and chroma and never import librosa; their "as before" rows first pay
 for what every analysis used to: librosa's chroma (a constant-Q transform) and mel spectrogram.
+Since 2026-12-03 reading a motion file never imports torch (rotations and forward kinematics are
+written against the array API); the "as before" row of `info dance.bvh` imports torch first.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ def main() -> None:
         cases = [
             ("choreo --help", ["--help"], ""),
             ("choreo info dance.bvh", ["info", dance], ""),
+            ("  as before", ["info", dance], "import torch; "),
             ("choreo info song.wav (music analysis)", ["info", song], ""),
             ("  as before", ["info", song], AS_BEFORE + TIMBRE),
             ("choreo generate 60 s song", ["generate", song, "-o", dance], ""),

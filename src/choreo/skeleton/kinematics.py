@@ -6,7 +6,8 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
-from array_api_compat import array_namespace
+
+from .rotations import array_namespace
 
 
 def forward_kinematics_torch(local_rotmats, root_positions, offsets, parents: Sequence[int]):
