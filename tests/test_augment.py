@@ -103,3 +103,39 @@ def test_a_joint_without_a_twin_is_named_in_the_error():
 
     with pytest.raises(ParameterError, match="joint 'l_hand' has no mirror twin 'r_hand'"):
         mirror_joint_order(("pelvis", "l_hand"))
+
+
+def test_turned_dance_is_the_same_dance_rotated_about_the_vertical_through_its_centre():
+    from choreo.motion import turned
+
+    motion = random_motion(frames=12, seed=3)
+    angle = np.deg2rad(90.0)
+    c, s = np.cos(angle), np.sin(angle)
+    about_y = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])  # right-handed, y up
+    centre = motion.root_positions.mean(0) * np.array([1.0, 0.0, 1.0])
+    expected = (motion.joint_positions() - centre) @ about_y.T + centre
+    out = turned(motion, 90.0)
+    np.testing.assert_allclose(out.joint_positions(), expected, atol=1e-9)
+    np.testing.assert_allclose(out.root_positions.mean(0), motion.root_positions.mean(0), atol=1e-12)
+    np.testing.assert_allclose(out.rotations[:, 1:], motion.rotations[:, 1:])  # only the root joint turns
+    np.testing.assert_allclose(turned(out, -90.0).joint_positions(), motion.joint_positions(), atol=1e-9)
+    assert out.metadata["turned_degrees"] == 90.0
+    # a turn keeps the dance's handedness (a mirror would flip it): left stays left of right
+    spread = lambda m: np.cross(m.joint_positions()[:, 16] - m.joint_positions()[:, 0],  # noqa: E731
+                                m.joint_positions()[:, 17] - m.joint_positions()[:, 0])[:, 1]
+    np.testing.assert_allclose(spread(out), spread(motion), atol=1e-9)
+
+
+def test_augmentation_yields_every_pace_mirror_and_facing():
+    from choreo_sgmd.data import Augmentation
+
+    from choreo.errors import ParameterError
+
+    motion, features = random_motion(frames=40), np.zeros((40, FEATURE_DIM))
+    copies = list(Augmentation(stretch=(1.0, 1.18), mirror=True, turns=(0.0, 90.0, 180.0)).variants(motion, features))
+    assert len(copies) == 2 * 2 * 3
+    assert [c[0].metadata.get("turned_degrees", 0.0) for c in copies[:3]] == [0.0, 90.0, 180.0]
+    assert copies[0][0] is motion and copies[3][0].metadata["mirrored"]
+    assert len(list(Augmentation().variants(motion, features))) == 1
+    with pytest.raises(ParameterError, match="turns must be angles"):
+        Augmentation(turns=(400.0,))

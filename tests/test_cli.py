@@ -226,3 +226,16 @@ def test_numpy_runtime_warnings_stay_off_stderr(capsys, monkeypatch, tmp_path):
             code, _, err = run_cli(capsys, "info", tmp_path / "d.bvh")
         assert code == 0 and err == ""
         assert sum(issubclass(w.category, RuntimeWarning) for w in caught) == shown
+
+
+@pytest.mark.parametrize("flag,value", [("--turns", "0,ninety"), ("--stretch", "1,fast")])
+def test_train_number_lists_are_refused_in_one_line_naming_the_flag(capsys, tmp_path, flag, value):
+    code, _, err = run_cli(capsys, "train", "sgmd", "--data", tmp_path, "--out", tmp_path / "run", flag, value)
+    assert_one_line_error(code, err)
+    assert flag in err and repr(value) in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_graph_training_refuses_turns(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "train", "graph", "--data", tmp_path, "--out", tmp_path / "run", "--turns", "90")
+    assert code != 0 and "turns" in err and "sgmd" in err

@@ -17,7 +17,8 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
                        max_steps: int | None = None, prompt_kind: str = "description", batch_size: int | None = None,
                        style_mode: str | None = None, style_init: str | None = None, style_dropout: float | None = None,
                        checkpoint_every: int | None = None, seed: int | None = None, mirror: bool | None = None,
-                       stretch: tuple[float, ...] | None = None, genre_balance: float | None = None,
+                       stretch: tuple[float, ...] | None = None, turns: tuple[float, ...] | None = None,
+                       genre_balance: float | None = None,
                        rhythm: bool | None = None, prediction: str | None = None, snr_gamma: float | None = None,
                        sigma_data: float | None = None,
                        progress=None,
@@ -36,7 +37,7 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
 
     train_overrides = {"max_steps": max_steps, "batch_size": batch_size, "seed": seed,
                        "checkpoint_every": checkpoint_every, "validation_every": checkpoint_every,
-                       "mirror": mirror, "stretch": stretch, "genre_balance": genre_balance}
+                       "mirror": mirror, "stretch": stretch, "turns": turns, "genre_balance": genre_balance}
     train_config = replace(TrainConfig(prompt_kind=prompt_kind), **{k: v for k, v in train_overrides.items() if v is not None})
     model_overrides = {"style_mode": style_mode, "style_init": style_init,
                        "music_dim": FEATURE_DIM if rhythm is False else None}
@@ -49,7 +50,7 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, config: str = 
     test_clips = [c for c in clips if c.split == TEST]
     windows = WindowConfig(seconds=model.window_frames * model.frame_stride / 30,
                            stride_seconds=train_config.window_stride_seconds)
-    augmentation = Augmentation(mirror=train_config.mirror, stretch=train_config.stretch)
+    augmentation = Augmentation(mirror=train_config.mirror, stretch=train_config.stretch, turns=train_config.turns)
     train_data = windows_to_tensors(train_clips, windows, prompt_kind, model.music_dim, augmentation, model.frame_stride)
     validation = (windows_to_tensors(test_clips, WindowConfig(seconds=5, stride_seconds=2.5), prompt_kind, model.music_dim,
                                      frame_stride=model.frame_stride) if test_clips else None)

@@ -91,12 +91,14 @@ class TrainConfig:
     num_threads: int = 0  # 0: torch's default
     mirror: bool = False  # also train on every clip's mirror image (off: ballroom is chiral, docs/sgmd.md)
     stretch: tuple[float, ...] = (0.85, 1.0, 1.18)  # and on it danced at these paces, music along
+    turns: tuple[float, ...] = (0.0,)  # and facing these ways (degrees about the vertical; unmeasured, off)
     genre_balance: float = 0.5  # draw windows with weight (windows of their genre)^-genre_balance
 
     def __post_init__(self):
         if self.prompt_kind not in PROMPT_KINDS:
             raise ValueError(f"prompt_kind must be one of {PROMPT_KINDS}, got {self.prompt_kind!r}")
         object.__setattr__(self, "stretch", tuple(float(f) for f in self.stretch))  # lists come back from checkpoints
+        object.__setattr__(self, "turns", tuple(float(t) for t in self.turns))
         if not 0.0 <= self.genre_balance <= 1.0:
             raise ValueError(f"genre_balance must be in [0, 1], got {self.genre_balance}")
 

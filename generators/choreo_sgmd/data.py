@@ -11,7 +11,7 @@ import torch
 
 from choreo.datasets import Clip, WindowConfig, window_starts
 from choreo.errors import ParameterError
-from choreo.motion import Motion, mirrored, motion_to_vector, stretched
+from choreo.motion import Motion, mirrored, motion_to_vector, stretched, turned
 from choreo.music import FEATURE_DIM, RHYTHM_DIM, rhythm_channels, stretch_features
 
 from .frame_rate import music_at_model_rate
@@ -43,22 +43,25 @@ class WindowTensors:
 
 @dataclass(frozen=True)
 class Augmentation:
-    """Copies of each training clip a real dancer could have danced: faster, slower and, for
-    styles without a handedness, mirrored (not ballroom: docs/sgmd.md)."""
+    """Copies of each training clip a real dancer could have danced: faster, slower, facing
+    another way and, for styles without a handedness, mirrored (not ballroom: docs/sgmd.md)."""
 
     mirror: bool = False
     stretch: tuple[float, ...] = (1.0,)  # pace factors; music features are stretched along
+    turns: tuple[float, ...] = (0.0,)  # facings in degrees about the vertical; 0 is the dance as captured
 
     def __post_init__(self):
         if not self.stretch or any(not 0.5 <= f <= 2.0 for f in self.stretch):
             raise ParameterError(f"stretch factors must be within [0.5, 2], got {self.stretch}")
+        if not self.turns or any(not -360.0 <= t <= 360.0 for t in self.turns):
+            raise ParameterError(f"turns must be angles within [-360, 360] degrees, got {self.turns}")
 
     def variants(self, motion: Motion, features: np.ndarray) -> Iterator[tuple[Motion, np.ndarray]]:
         for factor in self.stretch:
             paced = (motion, features) if factor == 1.0 else (stretched(motion, factor), stretch_features(features, factor))
-            yield paced
-            if self.mirror:
-                yield mirrored(paced[0]), paced[1]
+            for copy in (paced[0], mirrored(paced[0])) if self.mirror else (paced[0],):
+                for degrees in self.turns:
+                    yield (copy if degrees == 0.0 else turned(copy, degrees)), paced[1]
 
 
 def music_input(features: np.ndarray, music_dim: int) -> np.ndarray:

@@ -33,7 +33,7 @@ from .schedule import NoiseSchedule
 from .style import GENRES
 
 VALIDATION_WINDOWS = 64
-BEFORE_AUGMENTATION = {"mirror": False, "stretch": (1.0,), "genre_balance": 0.0}  # what older checkpoints trained with
+BEFORE_AUGMENTATION = {"mirror": False, "stretch": (1.0,), "turns": (0.0,), "genre_balance": 0.0}  # what older checkpoints trained with
 
 
 def _step_generator(seed: int, step: int) -> torch.Generator:

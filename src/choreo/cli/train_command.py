@@ -25,6 +25,7 @@ def train(
     seed: Optional[int] = typer.Option(None, help="Seed of initialisation, batches and noise (default 0)."),
     mirror: Optional[bool] = typer.Option(None, "--mirror/--no-mirror", help="sgmd: also train on mirrored dances (default off: mirrored M2D dances score FID_k 376)."),
     stretch: Optional[str] = typer.Option(None, help="sgmd: paces to also train at, music stretched along (default 0.85,1,1.18; 1 = off)."),
+    turns: Optional[str] = typer.Option(None, help="sgmd: also train on every clip turned by these angles about the vertical, e.g. 0,90,180,270 (default 0: off)."),
     genre_balance: Optional[float] = typer.Option(None, help="sgmd: 0 draws windows uniformly, 1 draws every genre equally (default 0.5)."),
     rhythm: Optional[bool] = typer.Option(None, "--rhythm/--no-rhythm", help="sgmd: feed beat phase and tempo to the model (default on)."),
     prediction: Optional[str] = typer.Option(None, help="sgmd: what the network predicts, x0 (default) or v."),
@@ -52,13 +53,9 @@ def train(
         raise ChoreoError(f"generator {generator!r} cannot be trained yet: {plugin.status}")
     if not data.is_dir():
         raise ParameterError(f"--data {data} is not a folder")
-    paces = None
-    if stretch is not None:
-        try:
-            paces = tuple(float(part) for part in stretch.split(","))
-        except ValueError:
-            raise ParameterError(f"--stretch wants comma-separated numbers such as 0.85,1,1.18, got {stretch!r}") from None
-    sgmd_extras = {k: v for k, v in {"mirror": mirror, "stretch": paces, "genre_balance": genre_balance,
+    paces = None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18")
+    facings = None if turns is None else _numbers("--turns", turns, "0,90,180,270")
+    sgmd_extras = {k: v for k, v in {"mirror": mirror, "stretch": paces, "turns": facings, "genre_balance": genre_balance,
                                      "rhythm": rhythm, "prediction": prediction, "snr_gamma": snr_gamma,
                                      "sigma_data": sigma_data}.items()
                    if v is not None}
@@ -76,3 +73,13 @@ def train(
         except ValueError as error:  # bad configuration names and the like
             raise ParameterError(str(error)) from None
     stderr_console.print(f"wrote {path}")
+
+
+def _numbers(flag: str, text: str, example: str) -> tuple[float, ...]:
+    """Comma-separated numbers of a flag, or a one-line error naming the flag."""
+    from ..errors import ParameterError
+
+    try:
+        return tuple(float(part) for part in text.split(","))
+    except ValueError:
+        raise ParameterError(f"{flag} wants comma-separated numbers such as {example}, got {text!r}") from None

@@ -1,10 +1,13 @@
-"""Honest ways to multiply dance data: a mirrored dancer and a dance at another pace.
+"""Honest ways to multiply dance data: a mirrored dancer, a dance at another pace, and the same
+dance facing another way.
 
 The same steps danced faster or slower are motion a real dancer could perform; the music
 features are stretched with the motion by :func:`choreo.music.stretch_features`, so beats stay on
 beats. The mirror image (left and right swapped, the path reflected) is one only for styles
 without a handedness: ballroom's hold, line of dance and turns are chiral, and mirrored M2D
-dances are far from real ones by FID (docs/sgmd.md).
+dances are far from real ones by FID (docs/sgmd.md). Turning the whole dance about the vertical
+axis keeps its handedness (a rotation, not a reflection): the same dance started facing another
+wall of the room.
 """
 
 from __future__ import annotations
@@ -52,3 +55,16 @@ def stretched(motion: Motion, factor: float) -> Motion:
         raise ParameterError(f"stretch factor must be within [0.25, 4], got {factor}")
     num_frames = int(np.floor((motion.num_frames - 1) / factor)) + 1
     return motion.sample_frames(np.arange(num_frames) * factor)
+
+
+def turned(motion: Motion, degrees: float) -> Motion:
+    """The whole dance turned by ``degrees`` about the vertical (y) axis through its mean root
+    position on the floor: the path rotates about that point and the root joint's orientation
+    turns with it, so every joint position does."""
+    from .stitch import rotate_about_y, turned_and_moved
+
+    angle = np.deg2rad(float(degrees))
+    centre = motion.root_positions.mean(axis=0) * np.array([1.0, 0.0, 1.0])
+    out = turned_and_moved(motion, angle, centre - rotate_about_y(centre, angle))
+    total = float(motion.metadata.get("turned_degrees", 0.0)) + float(degrees)
+    return out.replace(metadata=dict(motion.metadata, turned_degrees=total))
