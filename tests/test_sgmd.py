@@ -108,7 +108,7 @@ def test_ddpm_runs_every_step_and_ends_on_x0():
         make_sampler("ddpm", NoiseSchedule(), 50)
 
 
-@pytest.mark.parametrize("cache_windows", [0, 5, 100])  # none, some and all chunks' conditions cached
+@pytest.mark.parametrize("cache_windows", [0, 5, 6, 100])  # none, some (a chunk ending at the budget included) and all
 def test_guidance_weight_one_is_the_conditional_prediction_and_two_extrapolates(cache_windows):
     from choreo_sgmd.guidance import GuidedDenoiser
 

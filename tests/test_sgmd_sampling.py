@@ -239,3 +239,86 @@ def test_block_constraints_carry_the_sampled_frames_and_keep_the_users():
     assert both.values[:2, 0].tolist() == [5.0, 6.0] and both.mask[:2].all()
     assert int(both.mask.sum()) == 5
     assert not user.mask[5:7].any()  # the user's constraints are not modified
+
+
+def test_sampler_defaults_are_the_cosine_schedule_and_edge_stochastic_ddim():
+    """The defaults callers rely on: cosine offset 0.008 and cap 0.999, DDIM with eta = 1 (as EDGE
+    samples) over every step until set_timesteps, and each step's clipped x0 reported."""
+    torch.testing.assert_close(cosine_alphas_cumprod(1000), torch.tensor(literal_cosine_alpha_bars(1000), dtype=torch.float64))
+    schedule = NoiseSchedule()
+    sampler = DDIMSampler(schedule)
+    assert sampler.eta == 1.0 and sampler.clip_x0
+    assert sampler.timesteps.tolist() == list(range(999, -1, -1))
+    assert make_sampler("ddim", schedule, 10).eta == 1.0
+    x0 = torch.tensor([[2.0, -0.5]])
+    for last in (make_sampler("ddim", schedule, 10).step(x0, 0, torch.zeros(1, 2)),
+                 make_sampler("ddpm", schedule, 1000).step(x0, 0, torch.zeros(1, 2))):
+        torch.testing.assert_close(last.pred_original_sample, x0.clamp(-1, 1))
+    with pytest.raises(ValueError, match="DDPM runs all 1000 steps; use DDIM for fewer"):
+        make_sampler("ddpm", schedule, 10)
+
+
+def counting(calls):
+    def denoise(sample):
+        calls.append(sample.clone())
+        return torch.zeros_like(sample)
+    return denoise
+
+
+def test_resampling_repeats_every_step_but_the_last_and_draws_from_the_callers_generator():
+    schedule = NoiseSchedule()
+    values, mask = torch.zeros(1, 3, 2), torch.zeros(1, 3, 2, dtype=torch.bool)
+    mask[..., 0] = True
+    known = Inpainting(values, mask)
+    ddim = make_sampler("ddim", schedule, 10)  # eta = 1: the step itself draws noise
+    for t, expected_calls in ((111, 3), (0, 1)):  # 111 steps to 0 (still a step); 0 is the end
+        calls = []
+        known.step(counting(calls), ddim, schedule, torch.ones(1, 3, 2), t, torch.Generator().manual_seed(0), resample=3)
+        assert len(calls) == expected_calls, t
+    runs = [known.step(counting([]), ddim, schedule, torch.ones(1, 3, 2), 555, torch.Generator().manual_seed(7), resample=2)
+            for _ in range(2)]
+    torch.testing.assert_close(runs[0], runs[1])  # same generator seed, same result: no global RNG
+    # the generator is left exactly where five draws leave it: step, impose, re-noise, step, impose
+    generator = torch.Generator().manual_seed(7)
+    known.step(counting([]), ddim, schedule, torch.ones(1, 3, 2), 555, generator, resample=2)
+    replay = torch.Generator().manual_seed(7)
+    for _ in range(5):
+        torch.randn((1, 3, 2), generator=replay)
+    torch.testing.assert_close(torch.randn(4, generator=generator), torch.randn(4, generator=replay))
+
+
+def test_impose_at_level_zero_still_noises_and_only_the_end_is_exact():
+    schedule = NoiseSchedule()
+    values = torch.full((1, 2, 1), 0.5)
+    known = Inpainting(values, torch.ones(1, 2, 1, dtype=torch.bool))
+    out = known.impose(torch.zeros(1, 2, 1), schedule, 0, torch.Generator().manual_seed(1))
+    a = float(schedule.alphas_cumprod[0])
+    noise = torch.randn((1, 2, 1), generator=torch.Generator().manual_seed(1))
+    torch.testing.assert_close(out, math.sqrt(a) * values + math.sqrt(1 - a) * noise)
+    assert not torch.equal(out, values)
+
+
+def test_window_styles_with_one_styled_frame_and_with_a_plain_bool():
+    per_frame = torch.tensor([[float(i), 0.0] for i in range(8)])
+    given = torch.tensor([False] * 3 + [True] + [False] * 4)  # only frame 3 has a style
+    styles, keep = window_styles(per_frame, given, [0, 4], 4, 8)
+    torch.testing.assert_close(styles[0], torch.tensor([3.0, 0.0]))
+    assert keep.tolist() == [True, False]
+    styles, keep = window_styles(per_frame, True, [0, 4], 4, 8)  # a style everywhere, given as a bool
+    torch.testing.assert_close(styles, torch.tensor([[1.5, 0.0], [5.5, 0.0]]))
+    assert keep.tolist() == [True, True]
+
+
+def test_align_root_on_a_single_known_frame_moves_by_its_whole_offset():
+    x0 = torch.zeros(1, 4, 151)
+    values, mask = torch.zeros(1, 4, 151), torch.zeros(1, 4, 151, dtype=torch.bool)
+    root = list(range(151))[ROOT_SLICE]
+    values[0, 2, root[0]] = 0.8
+    mask[0, 2, root[0]] = True
+    out = Inpainting(values, mask).align_root(x0)
+    torch.testing.assert_close(out[0, :, root[0]], torch.full((4,), 0.8))
+
+
+def test_block_constraints_mask_is_boolean_and_frame_by_channel():
+    carried = _block_constraints(None, torch.zeros(20, 3), 5, 15, 2)
+    assert carried.mask.dtype == torch.bool and carried.mask.shape == (10, 3) and carried.values.shape == (10, 3)
