@@ -244,7 +244,9 @@ def test_block_constraints_carry_the_sampled_frames_and_keep_the_users():
 def test_sampler_defaults_are_the_cosine_schedule_and_edge_stochastic_ddim():
     """The defaults callers rely on: cosine offset 0.008 and cap 0.999, DDIM with eta = 1 (as EDGE
     samples) over every step until set_timesteps, and each step's clipped x0 reported."""
-    torch.testing.assert_close(cosine_alphas_cumprod(1000), torch.tensor(literal_cosine_alpha_bars(1000), dtype=torch.float64))
+    defaults = cosine_alphas_cumprod(1000)
+    torch.testing.assert_close(defaults, torch.tensor(literal_cosine_alpha_bars(1000), dtype=torch.float64), rtol=1e-12, atol=0)
+    assert float(defaults[-1] / defaults[-2]) == pytest.approx(0.001)  # the last beta is the 0.999 cap
     schedule = NoiseSchedule()
     sampler = DDIMSampler(schedule)
     assert sampler.eta == 1.0 and sampler.clip_x0
@@ -304,8 +306,9 @@ def test_window_styles_with_one_styled_frame_and_with_a_plain_bool():
     styles, keep = window_styles(per_frame, given, [0, 4], 4, 8)
     torch.testing.assert_close(styles[0], torch.tensor([3.0, 0.0]))
     assert keep.tolist() == [True, False]
-    styles, keep = window_styles(per_frame, True, [0, 4], 4, 8)  # a style everywhere, given as a bool
-    torch.testing.assert_close(styles, torch.tensor([[1.5, 0.0], [5.5, 0.0]]))
+    wide = torch.cat([per_frame, torch.ones(8, 1)], dim=1)  # 3 columns: no accidental broadcasting
+    styles, keep = window_styles(wide, True, [0, 4], 4, 8)  # a style everywhere, given as a bool
+    torch.testing.assert_close(styles, torch.tensor([[1.5, 0.0, 1.0], [5.5, 0.0, 1.0]]))
     assert keep.tolist() == [True, True]
 
 
