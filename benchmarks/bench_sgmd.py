@@ -60,25 +60,21 @@ def memory(minutes: list[float]) -> None:
 
 
 def quality(checkpoint: Path, steps_list: list[int]) -> None:
-    from choreo.datasets import TEST, TRAIN, load_dataset
-    from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
-    from choreo_sgmd.evaluation import generate_window_dances
-    from choreo_sgmd.sampling import SamplingOptions
+    from choreo.datasets import load_dataset
+    from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score, score_generator, table_row, windows_as_dances
 
     data = REPO.parent / "shared" / "data" / "m2d"
     if not data.is_dir():
         print(f"\n(quality skipped: {data} not found)")
         return
     generator = SGMDGenerator(checkpoint)
-    clips = load_dataset(data)
-    windows = scoring_windows([c for c in clips if c.split == TEST])
-    train = windows_as_dances([c for c in clips if c.split == TRAIN])
+    scoring = ScoringSet.from_clips(load_dataset(data))
     print("\n## Quality against the number of DDIM steps (M2D test windows, guidance 2)\n")
     print(TABLE_HEADER.format(label="steps"))
-    print(table_row("real test motion", score(windows_as_dances([c for c in clips if c.split == TEST]), train)))
+    print(table_row("real test motion", score(windows_as_dances(scoring.clips), scoring.reference)))
     for steps in steps_list:
-        dances = generate_window_dances(generator, windows, SamplingOptions(steps=steps, guidance=2.0))
-        print(table_row(f"DDIM {steps}", score(dances, train)), flush=True)
+        report, _ = score_generator(generator, scoring, options={"steps": steps, "guidance": 2.0})
+        print(table_row(f"DDIM {steps}", report), flush=True)
 
 
 def main() -> None:

@@ -29,7 +29,8 @@ from choreo.datasets import TEST, TRAIN, load_dataset
 from choreo.generator import GenerationRequest
 from choreo.metrics import Dance
 from choreo.metrics.genre import GenreClassifier
-from choreo.metrics.protocol import TABLE_HEADER, music_beats, score, scoring_windows, table_row, windows_as_dances
+from choreo.metrics.protocol import (TABLE_HEADER, ScoringSet, music_beats, score, score_generator, scoring_windows,
+                                     table_row, windows_as_dances)
 from choreo.music import Music
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -52,23 +53,22 @@ def retrieval_dances(train_windows, test_windows) -> list[Dance]:
     return dances
 
 
-def sgmd_dances(checkpoint: Path, windows, guidance: float, with_style: bool) -> list[Dance]:
-    from choreo_sgmd.evaluation import generate_window_dances
-    from choreo_sgmd.generator import SGMDGenerator
-    from choreo_sgmd.sampling import SamplingOptions
+def sgmd_dances(checkpoint: Path, scoring: ScoringSet, guidance: float, with_style: bool) -> list[Dance]:
+    from choreo import load_backend
 
-    return generate_window_dances(SGMDGenerator(checkpoint), windows, SamplingOptions(guidance=guidance), with_style)
+    return score_generator(load_backend("sgmd", checkpoint), scoring, with_style=with_style,
+                           options={"guidance": guidance})[1]
 
 
-def graph_dances(train_clips, test_clips, windows) -> list[Dance]:
+def graph_dances(train_clips, scoring: ScoringSet) -> list[Dance]:
     from choreo_graph import DEFAULT_CHECKPOINT
-    from choreo_graph.evaluation import clips_repertoire, generate_window_dances, window_mels
+    from choreo_graph.evaluation import clips_repertoire
     from choreo_graph.generator import ChoreoGraphGenerator
     from choreo_graph.model import load_checkpoint
 
-    model, _ = load_checkpoint(DEFAULT_CHECKPOINT)
+    model, _ = load_checkpoint(DEFAULT_CHECKPOINT)  # a repertoire cut from the train split, not the bundled one
     generator = ChoreoGraphGenerator(model, clips_repertoire(model, train_clips, 60, "M2D train"))
-    return generate_window_dances(generator, windows, window_mels(test_clips))
+    return score_generator(generator, scoring, with_style=False)[1]
 
 
 def speed_and_memory(durations: list[float], folder: Path) -> list[tuple]:
@@ -154,18 +154,18 @@ def main() -> None:
     clips = load_dataset(args.data)
     train = [c for c in clips if c.split == TRAIN]
     test = [c for c in clips if c.split == TEST]
-    windows, train_windows = scoring_windows(test), scoring_windows(train)
-    reference = windows_as_dances(train)
+    scoring = ScoringSet.from_clips(clips)
+    windows, train_windows, reference = scoring.windows, scoring_windows(train), scoring.reference
     genres = [w.genre for w in windows]
 
     print("quality...", flush=True)
     sets = {"real test motion (the reference)": windows_as_dances(test),
             "retrieval baseline (nearest train music)": retrieval_dances(train_windows, windows)}
     if args.edge.is_file():
-        sets["SGMD without style (EDGE-equivalent ablation, 6,000 steps like the bundled model)"] = sgmd_dances(args.edge, windows, 2.0, False)
-    sets["SGMD bundled, guidance 1"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, windows, 1.0, True)
-    sets["SGMD bundled, guidance 2 (default)"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, windows, 2.0, True)
-    sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, test, windows)
+        sets["SGMD without style (EDGE-equivalent ablation, 6,000 steps like the bundled model)"] = sgmd_dances(args.edge, scoring, 2.0, False)
+    sets["SGMD bundled, guidance 1"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, 1.0, True)
+    sets["SGMD bundled, guidance 2 (default)"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, 2.0, True)
+    sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, scoring)
     reports = {name: score(dances, reference) for name, dances in sets.items()}
 
     print("style adherence...", flush=True)

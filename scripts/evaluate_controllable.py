@@ -18,14 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
+from choreo import load_backend
 from choreo.constraints import Constraints
-from choreo.datasets import TEST, TRAIN, load_dataset
+from choreo.datasets import load_dataset
 from choreo.metrics import Dance
-from choreo.metrics.protocol import fmt, music_beats, score, scoring_windows, windows_as_dances
+from choreo.metrics.protocol import ScoringSet, fmt, generate_window_motions, music_beats, score
 from choreo.skeleton import LOWER_BODY_JOINTS, PARENTS, UPPER_BODY_JOINTS
-from choreo_sgmd.evaluation import generate_window_motions
-from choreo_sgmd.generator import SGMDGenerator
-from choreo_sgmd.sampling import SamplingOptions
 
 REPO = Path(__file__).resolve().parents[1]
 INPAINT_KEEP = 0.7  # the paper gives 70 % of the real frames
@@ -86,10 +84,9 @@ def main() -> None:
     parser.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
     parser.add_argument("--limit", type=int, default=None, help="score only the first N windows (smoke tests)")
     args = parser.parse_args()
-    generator = SGMDGenerator(args.checkpoint)
-    clips = load_dataset(args.data)
-    windows = scoring_windows([c for c in clips if c.split == TEST])[: args.limit]
-    train = windows_as_dances([c for c in clips if c.split == TRAIN])
+    generator = load_backend("sgmd", args.checkpoint)
+    scoring = ScoringSet.from_clips(load_dataset(args.data))
+    windows, train = scoring.windows[: args.limit], scoring.reference
     real = [w.motion for w in windows]
     print(f"{Path(args.checkpoint).name} (step {generator.trained_steps}), DDIM {args.steps}, w = {args.guidance:g}, "
           f"{len(windows)} M2D test windows\n")
@@ -100,9 +97,8 @@ def main() -> None:
         started = time.time()
         rng = np.random.default_rng(args.seed)
         constraints = [task_constraints(task, m, rng) for m in real]
-        motions = generate_window_motions(generator, windows, SamplingOptions(steps=args.steps, guidance=args.guidance,
-                                                                               seed=args.seed, resample=args.resample),
-                                             constraints=constraints)
+        motions = generate_window_motions(generator, windows, seed=args.seed, constraints=constraints,
+                                          options={"steps": args.steps, "guidance": args.guidance, "resample": args.resample})
         errors, path_errors, jerk_gen, jerk_real = [], [], [], []
         dances = []
         for window, motion, truth, c in zip(windows, motions, real, constraints):

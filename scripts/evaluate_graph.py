@@ -14,16 +14,15 @@ from __future__ import annotations
 
 import argparse
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from choreo.datasets import TEST, TRAIN, load_dataset
-from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
+from choreo.datasets import TRAIN, load_dataset, select_split
+from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row
 from choreo_graph import DEFAULT_CHECKPOINT
 from choreo_graph.config import GraphConfig
-from choreo_graph.evaluation import clips_repertoire, generate_window_dances, window_mels
+from choreo_graph.evaluation import clips_repertoire
 from choreo_graph.generator import ChoreoGraphGenerator
 from choreo_graph.graph import music_windows, replayed_nodes, select_candidates
 from choreo_graph.model import load_checkpoint
@@ -78,8 +77,7 @@ def main() -> None:
     args = parser.parse_args()
 
     clips = load_dataset(args.data)
-    train = [c for c in clips if c.split == TRAIN]
-    test = [c for c in clips if c.split == TEST and c.audio_path]
+    train = select_split(clips, TRAIN)
     model, _ = load_checkpoint(args.checkpoint)
     started = time.perf_counter()
     if args.repertoire:
@@ -93,21 +91,21 @@ def main() -> None:
         repertoire = Repertoire.load(args.save_repertoire)
     generator = ChoreoGraphGenerator(model, repertoire)
 
-    mels = window_mels(test)
-    windows = scoring_windows(test)
-    print(selector_genre_precision(model, repertoire, windows, mels), flush=True)
+    scoring = ScoringSet.from_clips(clips)
+    mels = scoring.log_mels()
+    print(selector_genre_precision(model, repertoire, scoring.windows, mels), flush=True)
     if args.whole_songs:
         print(whole_song_replays(generator, mels, args.top_k[0]), flush=True)
-    reference = windows_as_dances(train)
     print(TABLE_HEADER.format(label="ChoreoGraph variant"), flush=True)
     for top_k in args.top_k:
         for variant in args.variants:
-            config = replace(GraphConfig(top_k=top_k), **VARIANTS[variant])
+            options = {"top_k": top_k, **VARIANTS[variant]}
             for finished in (False, True) if args.finished else (False,):
                 started = time.perf_counter()
-                dances = generate_window_dances(generator, windows, mels, config, finished, args.foot_lock)
+                report, _ = score_generator(generator, scoring, with_style=False, options=options, finished=finished,
+                                            foot_lock=args.foot_lock)
                 label = f"{variant}, K={top_k}{', finished' if finished else ''} ({time.perf_counter() - started:.0f} s)"
-                print(table_row(label, score(dances, reference)), flush=True)
+                print(table_row(label, report), flush=True)
 
 
 if __name__ == "__main__":

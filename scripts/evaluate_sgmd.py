@@ -15,12 +15,10 @@ from pathlib import Path
 
 import torch
 
-from choreo.datasets import TEST, TRAIN, load_dataset
+from choreo.datasets import TEST, TRAIN, load_dataset, select_split
+from choreo import load_backend
 from choreo.metrics.genre import GenreClassifier
-from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances
-from choreo_sgmd.evaluation import generate_window_dances
-from choreo_sgmd.generator import SGMDGenerator
-from choreo_sgmd.sampling import SamplingOptions
+from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score, score_generator, scoring_windows, table_row, windows_as_dances
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -47,17 +45,16 @@ def main() -> None:
     if args.threads:
         torch.set_num_threads(args.threads)
     clips = load_dataset(args.data)
-    test_clips = [c for c in clips if c.split == TEST]
-    train_clips = [c for c in clips if c.split == TRAIN]
-    windows, train = scoring_windows(test_clips), windows_as_dances(train_clips)
-    train_windows = scoring_windows(train_clips)
+    test_clips, train_clips = select_split(clips, TEST), select_split(clips, TRAIN)
+    scoring = ScoringSet.from_clips(clips)
+    windows, train_windows = scoring.windows, scoring_windows(train_clips)
     classifier = GenreClassifier.fit([w.motion.joint_positions() for w in train_windows], [w.genre for w in train_windows])
     genres = [w.genre for w in windows]
     print(TABLE_HEADER.format(label="model"), flush=True)
     if args.by_genre:
         print_by_genre("real test motion", windows, windows_as_dances(test_clips), train_clips)
     for checkpoint in args.checkpoints:
-        generator = SGMDGenerator(checkpoint)
+        generator = load_backend("sgmd", checkpoint)
         for guidance in args.guidance:
             for steps, interval, style_w in [(s, i, g) for s in args.steps for i in args.intervals
                                              for g in args.style_guidance]:
@@ -68,12 +65,12 @@ def main() -> None:
                          + (f", style w={style_w:g}" if style_w != 1.0 else "")
                          + (", no style" if args.no_style else ""))
                 for finished in (False, True) if args.finished else (False,):
-                    options = SamplingOptions(steps=steps, guidance=guidance, seed=args.seed, guidance_interval=bounds,
-                                              style_guidance=style_w)  # same noise both times
-                    dances = generate_window_dances(generator, windows, options, not args.no_style, finished,
-                                                    args.foot_lock)
+                    options = {"steps": steps, "guidance": guidance, "guidance_interval": bounds,
+                               "style_guidance": style_w}  # same noise both times
+                    report, dances = score_generator(generator, scoring, with_style=not args.no_style, seed=args.seed,
+                                                     options=options, finished=finished, foot_lock=args.foot_lock)
                     recognised = classifier.agreement([d.positions for d in dances], genres)
-                    print(table_row(label + (", finished" if finished else ""), score(dances, train))
+                    print(table_row(label + (", finished" if finished else ""), report)
                           + f" <!-- genre recognised {100 * recognised:.1f} %, {time.time() - started:.0f} s -->", flush=True)
                     if args.by_genre:
                         print_by_genre(label + (", finished" if finished else ""), windows, dances, train_clips)

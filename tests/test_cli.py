@@ -236,6 +236,16 @@ def test_train_number_lists_are_refused_in_one_line_naming_the_flag(capsys, tmp_
     assert not (tmp_path / "run").exists()
 
 
-def test_graph_training_refuses_turns(capsys, tmp_path):
-    code, _, err = run_cli(capsys, "train", "graph", "--data", tmp_path, "--out", tmp_path / "run", "--turns", "90")
-    assert code != 0 and "turns" in err and "sgmd" in err
+@pytest.mark.parametrize("flag,value", [("--turns", "90"), ("--config", "cpu"), ("--prompt", "description"),
+                                        ("--checkpoint-every", "10")])
+def test_graph_training_refuses_sgmd_flags_even_at_their_sgmd_defaults(capsys, tmp_path, flag, value):
+    code, _, err = run_cli(capsys, "train", "graph", "--data", tmp_path, "--out", tmp_path / "run", flag, value)
+    assert_one_line_error(code, err)
+    assert code == 2 and f"graph has no option {flag[2:].replace('-', '_')}" in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_graph_training_refuses_resume_before_any_work(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "train", "graph", "--data", tmp_path, "--out", tmp_path / "run", "--resume")
+    assert_one_line_error(code, err)
+    assert "cannot resume" in err and not (tmp_path / "run").exists()

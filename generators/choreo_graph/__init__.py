@@ -11,35 +11,36 @@ from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
 
-from .config import GraphConfig
+from .config import GraphConfig, TrainOptions
 
 WEIGHTS = Path(__file__).parent / "weights"
 DEFAULT_CHECKPOINT = WEIGHTS / "graph-m2d.pt"
 DEFAULT_REPERTOIRE = WEIGHTS / "repertoire-sgmd.npz"
 
 
-def train_from_dataset(data_dir: str | Path, out_dir: str | Path, max_steps: int | None = None,
-                       batch_size: int | None = None, seed: int | None = None, progress=None, load_progress=None,
-                       **sgmd_only) -> Path:
+def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: TrainOptions = TrainOptions(),
+                       resume: bool = False, progress=None, load_progress=None) -> Path:
     """Train the style encoders and tempo-density estimators on a dataset's train split (its test
-    split is reported as validation). ``max_steps`` sets every stage's step count."""
+    split is reported as validation). ``options.steps`` sets every stage's step count."""
     from dataclasses import replace
 
     from choreo.datasets import TEST, TRAIN, load_dataset
+    from choreo.errors import ParameterError
+    from choreo.metrics.protocol import clip_log_mels
 
     from .config import CLIP_FRAMES, WINDOW_FRAMES, TrainConfig
-    from .data import clip_mel, paired_excerpts
+    from .data import paired_excerpts
     from .training import STYLE_STRIDE, train_graph
 
-    given = {k: v for k, v in sgmd_only.items() if v not in (None, False, "cpu", "description")}
-    if given:
-        raise ValueError(f"option(s) {', '.join(sorted(given))} apply to sgmd, not to graph")
-    overrides = {"batch_size": batch_size, "seed": seed}
-    if max_steps is not None:
-        overrides |= {"style_steps": max_steps, "motion_tempo_steps": max_steps, "music_tempo_steps": max_steps}
+    if resume:
+        raise ParameterError("graph training cannot resume (it keeps no optimiser state): start it again")
+    overrides = {"batch_size": options.batch_size, "seed": options.seed}
+    if options.steps is not None:
+        overrides |= {"style_steps": options.steps, "motion_tempo_steps": options.steps,
+                      "music_tempo_steps": options.steps}
     config = replace(TrainConfig(), **{k: v for k, v in overrides.items() if v is not None})
     clips = [c for c in load_dataset(data_dir, progress=load_progress) if c.audio_path]
-    mels = {c.name: clip_mel(c) for c in clips}
+    mels = clip_log_mels(clips)
     train = [c for c in clips if c.split in (TRAIN, None)]
     test = [c for c in clips if c.split == TEST]
 
@@ -85,4 +86,5 @@ plugin = GeneratorPlugin(
     train=train_from_dataset,
     default_checkpoint=DEFAULT_CHECKPOINT,
     options=GraphConfig,
+    train_options=TrainOptions,
 )

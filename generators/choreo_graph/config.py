@@ -72,6 +72,15 @@ class GraphConfig:
 
 
 @dataclass(frozen=True)
+class TrainOptions:
+    """What `choreo train graph` takes; None keeps TrainConfig's default."""
+
+    steps: int | None = None  # of each of the three stages
+    batch_size: int | None = None
+    seed: int | None = None
+
+
+@dataclass(frozen=True)
 class TrainConfig:
     batch_size: int = 32
     learning_rate: float = 1e-3

@@ -11,16 +11,8 @@ import numpy as np
 from choreo.datasets import Clip, WindowConfig, window_starts
 from choreo.metrics.beats import motion_beats
 from choreo.motion.stitch import local_positions
-from choreo.music.mel import log_mel_from_file
 
 from .config import FPS
-
-
-def clip_mel(clip: Clip) -> np.ndarray:
-    """(T, n_mels) log-mel under the clip's frames (from its audio file and offset)."""
-    if clip.audio_path is None:
-        raise ValueError(f"clip {clip.name} has no audio file")
-    return log_mel_from_file(clip.audio_path, max(clip.audio_offset, 0.0), clip.motion.num_frames)
 
 
 def excerpt_starts(num_frames: int, length: int, stride: int) -> list[int]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 import torch
@@ -22,7 +22,7 @@ from .frame_rate import frames_at_full_rate, known_at_model_rate, music_at_model
 from .model import Denoiser
 from .normalizer import Normalizer
 from .options import SamplingOptions
-from .sampling import Inpainting, sample_long
+from .sampling import Inpainting, sample_independent, sample_long
 from .schedule import NoiseSchedule
 from .style import GENRES, Style, resolve_style
 
@@ -95,16 +95,20 @@ class SGMDGenerator(Generator):
         """Sampled frame vectors (..., Tm, D) back at 30 fps, ``num_frames`` of them."""
         return frames_at_full_rate(vectors, self.model_config.frame_stride, num_frames)
 
-    def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
+    def sampling_options(self, request: GenerationRequest) -> SamplingOptions:
+        """The request's options as SamplingOptions (its seed included), the music checked."""
         options = parse_options("sgmd", SamplingOptions, request.options)
         if request.seed is not None:
             options = replace(options, seed=request.seed)
         if options.sampler == "ddpm" and request.options.get("steps") is None:
             options = replace(options, steps=self.diffusion_config.timesteps)
-
         if not request.music.timbre:
             raise ParameterError("sgmd reads the music's MFCC and chroma: analyse the song with them "
                                  "(Music.from_file(path), not timbre=False)")
+        return options
+
+    def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
+        options = self.sampling_options(request)
         num_frames = request.music.num_frames
         style, keep_style, genres, notices = self.style_conditioning(request.style, num_frames, request.music.fps)
         inpainting, known = self.inpainting(request.constraints, num_frames)
@@ -125,6 +129,40 @@ class SGMDGenerator(Generator):
             "constrained_fraction": None if request.constraints is None else round(request.constraints.known_fraction(), 4),
         }  # fmt: skip
         return motion
+
+    def generate_windows(self, requests: Sequence[GenerationRequest]) -> list[Motion]:
+        """Every window sampled at once as one batch, each on its own (no stitching: how papers score
+        5 s clips). The batch's noise comes from the one seed the requests share; they also share
+        options and length, and either all carry constraints or none does. Styles are single
+        prompts (no time schedule)."""
+        if not requests:
+            return []
+        first = requests[0]
+        if any(r.options != first.options or r.seed != first.seed or r.music.num_frames != first.music.num_frames
+               for r in requests):
+            raise ParameterError("windows danced as one batch share their options, seed and length")
+        if len({r.constraints is None for r in requests}) > 1:
+            raise ParameterError("windows danced as one batch are either all constrained or none is")
+        options = self.sampling_options(first)
+        num_frames = first.music.num_frames
+        music = self.music_tensor(np.stack([r.music.features for r in requests]))
+        resolved = [self.style_vector(r.style) for r in requests]
+        styles = torch.stack([vector for vector, _ in resolved])
+        keep_style = torch.tensor([style.vector is not None for _, style in resolved])
+        inpainting, known = None, None
+        if first.constraints is not None:
+            parts = [self.inpainting(r.constraints, num_frames) for r in requests]
+            if any(part is None for part, _ in parts):
+                raise ParameterError("windows danced as one batch are either all constrained or none is")
+            inpainting = Inpainting(torch.stack([p.values for p, _ in parts]), torch.stack([p.mask for p, _ in parts]))
+            known = tuple(np.stack(arrays) for arrays in zip(*(k for _, k in parts)))
+        x0 = sample_independent(self.model, self.schedule, music, styles, keep_style, self.model_config.frame_dim,
+                                options, inpainting)
+        vectors = self.at_full_rate(self.normalizer.denormalize(x0).numpy(), num_frames)
+        if known is not None:  # exact, as in generate
+            values, mask = known
+            vectors[mask] = values[mask]
+        return [vector_to_motion(v, fps=r.music.fps)[0] for v, r in zip(vectors, requests)]
 
     def style_vector(self, prompt: str | None) -> tuple[torch.Tensor, Style]:
         """The (S,) vector the model reads for one prompt (zeros where no style is given) and what it

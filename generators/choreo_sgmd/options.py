@@ -36,3 +36,27 @@ class SamplingOptions:
         """The diffusion steps t (inclusive) inside ``guidance_interval``, for T = ``timesteps``."""
         low, high = self.guidance_interval
         return round(low * (timesteps - 1)), round(high * (timesteps - 1))
+
+
+@dataclass(frozen=True)
+class TrainOptions:
+    """What `choreo train sgmd` takes. None leaves the setting at its configuration's default
+    (config.py: TrainConfig, DiffusionConfig, the model preset), so each default lives there only."""
+
+    config: str = "cpu"  # model preset (config.PRESETS)
+    steps: int | None = None
+    batch_size: int | None = None
+    prompt: str = "description"  # style prompt kind
+    style_mode: str | None = None
+    style_init: str | None = None
+    style_dropout: float | None = None
+    checkpoint_every: int | None = None  # also the validation interval
+    seed: int | None = None
+    mirror: bool | None = None
+    stretch: tuple[float, ...] | None = None
+    turns: tuple[float, ...] | None = None
+    genre_balance: float | None = None
+    rhythm: bool | None = None  # False: the 35-d features only (no beat phase and tempo channels)
+    prediction: str | None = None
+    sigma_data: float | None = None
+    snr_gamma: float | None = None

@@ -9,9 +9,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from choreo.datasets import TEST, load_dataset
 from choreo.metrics.protocol import scoring_windows
-from choreo_sgmd.evaluation import generate_window_motions
-from choreo_sgmd.generator import SGMDGenerator
-from choreo_sgmd.options import SamplingOptions
+from choreo import load_backend
+from choreo.metrics.protocol import generate_window_motions
 from pathlib import Path
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "m2d"
@@ -21,10 +20,10 @@ clips = load_dataset(DATA)
 windows = scoring_windows([c for c in clips if c.split == TEST])
 pick = [i for i, w in enumerate(windows) if w.genre == "rumba"][5:6] + [i for i, w in enumerate(windows) if w.genre == "waltz"][10:11]
 sel = [windows[i] for i in pick]
-g = SGMDGenerator(sys.argv[2] if len(sys.argv) > 2 else CHECKPOINT)
+g = load_backend("sgmd", sys.argv[2] if len(sys.argv) > 2 else CHECKPOINT)
 rows = {"real": [w.motion.joint_positions() for w in sel]}
 for w in (2.0, 4.0):
-    rows[f"w={w:g}"] = [m.joint_positions() for m in generate_window_motions(g, sel, SamplingOptions(steps=10, guidance=w, seed=0))]
+    rows[f"w={w:g}"] = [m.joint_positions() for m in generate_window_motions(g, sel, options={"steps": 10, "guidance": w})]
 fig, axes = plt.subplots(len(sel), 3, figsize=(15, 3.2 * len(sel)), sharey=False)
 for c, (name, dances) in enumerate(rows.items()):
     for r, p in enumerate(dances):

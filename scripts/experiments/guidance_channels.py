@@ -10,9 +10,8 @@ from choreo.metrics.protocol import score, scoring_windows, table_row, windows_a
 from choreo.motion.vector import CONTACT_SLICE, ROOT_SLICE, ROTATION_SLICE
 import choreo_sgmd.sampling as sampling
 from choreo_sgmd.guidance import GuidedDenoiser
-from choreo_sgmd.evaluation import generate_window_motions
-from choreo_sgmd.generator import SGMDGenerator
-from choreo_sgmd.options import SamplingOptions
+from choreo import load_backend
+from choreo.metrics.protocol import generate_window_motions
 from pathlib import Path
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "m2d"
@@ -36,9 +35,9 @@ def channel_guided(unguided):
 clips = load_dataset(DATA)
 windows = scoring_windows([c for c in clips if c.split == TEST])
 train = windows_as_dances([c for c in clips if c.split == TRAIN])
-generator = SGMDGenerator(CHECKPOINT)
+generator = load_backend("sgmd", CHECKPOINT)
 for name in sys.argv[1:]:
     sampling.GuidedDenoiser = channel_guided(KEEP[name])
-    motions = generate_window_motions(generator, windows, SamplingOptions(steps=10, guidance=4.0, seed=0))
+    motions = generate_window_motions(generator, windows, options={"steps": 10, "guidance": 4.0})
     dances = [window_dance(w, m) for w, m in zip(windows, motions)]
     print(table_row(f"w=4, unguided {name}", score(dances, train)), flush=True)

@@ -7,9 +7,8 @@ import sys
 import numpy as np
 from choreo.datasets import TEST, load_dataset
 from choreo.metrics.protocol import scoring_windows
-from choreo_sgmd.evaluation import generate_window_motions
-from choreo_sgmd.generator import SGMDGenerator
-from choreo_sgmd.options import SamplingOptions
+from choreo import load_backend
+from choreo.metrics.protocol import generate_window_motions
 import torch
 from pathlib import Path
 
@@ -39,11 +38,11 @@ for g in genres:
     print(f"  real [{g}]:", stats(by_genre(windows, real, g)), flush=True)
 specs = sys.argv[1:]
 checkpoint = specs.pop(0) if specs and specs[0].endswith(".pt") else CHECKPOINT
-generator = SGMDGenerator(checkpoint)
+generator = load_backend("sgmd", checkpoint)
 for spec in specs:
     w, interval = spec.split("@") if "@" in spec else (spec, "0:1")
-    options = SamplingOptions(steps=10, guidance=float(w), seed=0, guidance_interval=tuple(float(b) for b in interval.split(":")))
-    gen = [m.joint_positions() for m in generate_window_motions(generator, windows, options)]
+    options = {"steps": 10, "guidance": float(w), "guidance_interval": tuple(float(b) for b in interval.split(":"))}
+    gen = [m.joint_positions() for m in generate_window_motions(generator, windows, options=options)]
     print(f"w={w} on {interval}:", stats(gen), flush=True)
     for g in genres:
         print(f"  [{g}]:", stats(by_genre(windows, gen, g)), flush=True)

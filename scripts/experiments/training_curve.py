@@ -21,11 +21,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from choreo.datasets import TEST, TRAIN, load_dataset  # noqa: E402
-from choreo.metrics.protocol import TABLE_HEADER, score, scoring_windows, table_row, windows_as_dances  # noqa: E402
-from choreo_sgmd.evaluation import generate_window_dances  # noqa: E402
-from choreo_sgmd.generator import SGMDGenerator  # noqa: E402
-from choreo_sgmd.options import SamplingOptions  # noqa: E402
+from choreo import load_backend  # noqa: E402
+from choreo.datasets import load_dataset  # noqa: E402
+from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
 REAL = {"fid_k": 18.31, "fid_g": 3.28, "div_k": 9.40, "pfc": 0.853}  # the reference row (docs/results.md)
@@ -45,17 +43,14 @@ def main() -> None:
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--label", default="SGMD")
     args = parser.parse_args()
-    clips = load_dataset(args.data)
-    windows = scoring_windows([c for c in clips if c.split == TEST])
-    train = windows_as_dances([c for c in clips if c.split == TRAIN])
+    scoring = ScoringSet.from_clips(load_dataset(args.data))
     start = seconds(args.start)
     points = []
     print(TABLE_HEADER.format(label="checkpoint (hours)"), flush=True)
     for item in args.checkpoints:
         path, stamp, series = (item.split("@") + [args.label])[:3]
-        generator = SGMDGenerator(path)
-        dances = generate_window_dances(generator, windows, SamplingOptions(steps=10, guidance=2.0, seed=0), True, False)
-        report = score(dances, train)
+        generator = load_backend("sgmd", path)
+        report, _ = score_generator(generator, scoring, options={"steps": 10, "guidance": 2.0})
         hours = float(stamp[1:]) if stamp.startswith("+") else (seconds(stamp) - start) / 3600
         points.append((hours, generator.trained_steps, report, series))
         print(table_row(f"{series}: step {generator.trained_steps} ({hours:.2f} h)", report), flush=True)

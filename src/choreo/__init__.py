@@ -9,13 +9,13 @@ __version__ = "0.1.0"
 
 from .errors import ChoreoError  # noqa: E402
 
-__all__ = ["ChoreoError", "__version__", "dance"]
+__all__ = ["ChoreoError", "__version__", "dance", "load_backend"]
 
 
 def __getattr__(name: str):
-    """``choreo.dance`` without importing torch or librosa until it is used."""
-    if name == "dance":
-        from .pipeline import dance
+    """``choreo.dance`` and ``choreo.load_backend`` without importing torch or librosa until used."""
+    if name in ("dance", "load_backend"):
+        from . import pipeline
 
-        return dance
+        return getattr(pipeline, name)
     raise AttributeError(f"module 'choreo' has no attribute {name!r}")

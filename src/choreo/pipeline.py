@@ -46,8 +46,10 @@ def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None
     if key in _BACKENDS:
         return _BACKENDS[key]
     plugin = available_plugins().get(name)
-    if plugin is None or plugin.factory is None:
+    if plugin is None:
         raise ParameterError(f"generator {name!r} is not available (see choreo generators)")
+    if plugin.factory is None:
+        raise ChoreoError(f"generator {name!r} is not available: {plugin.status or 'it cannot generate'}")
     if checkpoint is None:
         checkpoint = plugin.default_checkpoint
         if checkpoint is None or not Path(checkpoint).is_file():

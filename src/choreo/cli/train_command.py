@@ -14,14 +14,14 @@ def train(
     generator: str = typer.Argument(..., help="Backend to train, e.g. sgmd (see choreo generators)."),
     data: Path = typer.Option(..., help="Dataset folder: M2D, AIST++ or BVH files with audio beside them."),
     out: Path = typer.Option(..., help="Folder for checkpoints (last.pt is rewritten atomically)."),
-    config: str = typer.Option("cpu", help="Model configuration: cpu (default), cpu15 (the cpu model at 15 fps), small, paper, tiny."),
+    config: Optional[str] = typer.Option(None, help="sgmd: model configuration: cpu (default), cpu15 (the cpu model at 15 fps), small, paper, tiny."),
     steps: Optional[int] = typer.Option(None, help="Train until this many optimiser steps (graph: steps of each of its three stages)."),
     batch_size: Optional[int] = typer.Option(None, help="Windows per step (default 32)."),
-    prompt: str = typer.Option("description", help="Style prompt kind: description, name or onehot."),
+    prompt: Optional[str] = typer.Option(None, help="sgmd: style prompt kind: description (default), name or onehot."),
     style_mode: Optional[str] = typer.Option(None, help="sgmd ablations: modulation (default), concat or none (EDGE)."),
     style_init: Optional[str] = typer.Option(None, help="sgmd: the style FC's initial weights, random (default) or zero (starts as the no-style model)."),
     style_dropout: Optional[float] = typer.Option(None, help="sgmd: share of training windows shown without their style (default 0.1)."),
-    checkpoint_every: Optional[int] = typer.Option(None, help="Steps between checkpoints and validations (default 500)."),
+    checkpoint_every: Optional[int] = typer.Option(None, help="sgmd: steps between checkpoints and validations (default 500)."),
     seed: Optional[int] = typer.Option(None, help="Seed of initialisation, batches and noise (default 0)."),
     mirror: Optional[bool] = typer.Option(None, "--mirror/--no-mirror", help="sgmd: also train on mirrored dances (default off: mirrored M2D dances score FID_k 376)."),
     stretch: Optional[str] = typer.Option(None, help="sgmd: paces to also train at, music stretched along (default 0.85,1,1.18; 1 = off)."),
@@ -44,21 +44,24 @@ def train(
     """
     from ..errors import ChoreoError, ParameterError
     from ..generator import available_plugins
+    from ..generator.options import parse_options
 
     plugins = available_plugins()
     if generator not in plugins:
         raise ParameterError(f"unknown generator {generator!r} (available: {', '.join(plugins)})")
     plugin = plugins[generator]
-    if plugin.train is None:
+    if plugin.train is None or plugin.train_options is None:
         raise ChoreoError(f"generator {generator!r} cannot be trained yet: {plugin.status}")
     if not data.is_dir():
         raise ParameterError(f"--data {data} is not a folder")
-    paces = None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18")
-    facings = None if turns is None else _numbers("--turns", turns, "0,90,180,270")
-    sgmd_extras = {k: v for k, v in {"mirror": mirror, "stretch": paces, "turns": facings, "genre_balance": genre_balance,
-                                     "rhythm": rhythm, "prediction": prediction, "snr_gamma": snr_gamma,
-                                     "sigma_data": sigma_data}.items()
-                   if v is not None}
+
+    given = {"config": config, "steps": steps, "batch_size": batch_size, "prompt": prompt, "style_mode": style_mode,
+             "style_init": style_init, "style_dropout": style_dropout, "checkpoint_every": checkpoint_every, "seed": seed,
+             "mirror": mirror, "genre_balance": genre_balance, "rhythm": rhythm, "prediction": prediction,
+             "sigma_data": sigma_data, "snr_gamma": snr_gamma,
+             "stretch": None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18"),
+             "turns": None if turns is None else _numbers("--turns", turns, "0,90,180,270")}
+    options = parse_options(generator, plugin.train_options, {k: v for k, v in given.items() if v is not None})
     with progress_bar(f"training {generator}") as update:
         def report(p):
             extra = f"loss {p.loss:.4f}" + (f", validation {p.validation_loss:.4f}" if p.validation_loss is not None else "")
@@ -66,10 +69,7 @@ def train(
             update(p.step, p.max_steps, f"{stage}{extra}, {p.windows_per_second:.0f} windows/s")
 
         try:
-            path = plugin.train(data, out, config=config, resume=resume, max_steps=steps, prompt_kind=prompt,
-                                batch_size=batch_size, style_mode=style_mode, style_init=style_init,
-                                style_dropout=style_dropout, checkpoint_every=checkpoint_every, seed=seed, progress=report,
-                                **sgmd_extras)
+            path = plugin.train(data, out, options, resume=resume, progress=report)
         except ValueError as error:  # bad configuration names and the like
             raise ParameterError(str(error)) from None
     stderr_console.print(f"wrote {path}")

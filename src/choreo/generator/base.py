@@ -10,7 +10,7 @@ from __future__ import annotations
 import abc
 from pathlib import Path
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 if TYPE_CHECKING:  # keep `choreo generators` fast: no torch/librosa import for type hints
     from ..constraints import Constraints
@@ -38,6 +38,14 @@ class Generator(abc.ABC):
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> "Motion":
         """Dance to ``request.music``; ``progress`` receives the fraction done in [0, 1]."""
 
+    def generate_windows(self, requests: Sequence[GenerationRequest]) -> list["Motion"]:
+        """Dances for many short excerpts at once (scoring protocols, batch tools).
+
+        This default dances them one by one. A backend that can batch overrides it; its dances
+        are then deterministic for the same requests but need not equal ``generate`` called on each.
+        """
+        return [self.generate(request) for request in requests]
+
 
 @dataclass
 class TrainProgress:
@@ -60,7 +68,8 @@ class GeneratorPlugin:
     ready: bool  # False while the backend is a placeholder
     status: str = ""  # shown when not ready: what is missing and where it is tracked
     factory: Callable[..., Generator] | None = None  # builds a Generator (e.g. from a checkpoint)
-    train: Callable[..., object] | None = None  # train(data_dir, out_dir, **options), for `choreo train NAME`
+    train: Callable[..., object] | None = None  # train(data_dir, out_dir, options, resume, progress, load_progress)
+    train_options: type | None = None  # dataclass of what `choreo train NAME` takes: flags are checked against it
     default_checkpoint: Path | None = None  # shipped weights used when the user names none
     options: type | None = None  # dataclass of its generation options: flags are checked against it before any work
     constraints: bool = False  # whether it dances under constraints (keys, seed motion, inpainting, a root path)
