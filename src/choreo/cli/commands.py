@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.table import Table
 
 from .progress import progress_bar, stderr_console, stdout_console
 
@@ -36,6 +35,8 @@ def info(
       choreo generate song.mp3 -o - -f npz | choreo info -
     """
     _require_file(path)
+    from rich.table import Table
+
     table = Table(show_header=False, box=None)
     table.add_row("file", str(path))
     if path.suffix.lower() in AUDIO_EXTENSIONS:
@@ -97,6 +98,8 @@ def generators() -> None:
     """
     from ..generator import available_plugins
 
+    from rich.table import Table
+
     table = Table("name", "ready", "what it does")
     for plugin in available_plugins().values():
         ready = "yes" if plugin.ready else f"no - {plugin.status}"
@@ -122,6 +125,8 @@ def prepare(
     with progress_bar(f"loading {root.name}") as update:
         clips = load_dataset(root, kind=kind, split=split, progress=lambda done, total, name: update(done, total, name))
     windows = WindowedDataset(clips, WindowConfig(seconds=window, stride_seconds=stride))
+    from rich.table import Table
+
     table = Table("clip", "genre", "split", "frames", "seconds")
     for clip in clips:
         table.add_row(clip.name, clip.genre or "-", clip.split or "-", str(clip.motion.num_frames),

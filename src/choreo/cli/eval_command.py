@@ -7,9 +7,7 @@ import warnings
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
-from rich.table import Table
 
 from .progress import progress_bar, stderr_console, stdout_console
 
@@ -23,6 +21,8 @@ def _find_music(motion_path: Path, music_dir: Path | None) -> Path | None:
 
 
 def _load_dances(files: list[Path], fps: float, up: str, music_dir: Path | None, update, offset: int, total: int):
+    import numpy as np
+
     from ..metrics import Dance, resample_positions
     from ..formats import read_joint_positions
     from ..music import Music
@@ -97,16 +97,22 @@ def evaluate(
 
 
 def _json_default(value):
+    import numpy as np
+
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
     raise TypeError(type(value))
 
 
 def _fmt(value) -> str:
-    return "-" if value is None or (isinstance(value, float) and not np.isfinite(value)) else f"{value:.4g}"
+    import math
+
+    return "-" if value is None or (isinstance(value, float) and not math.isfinite(value)) else f"{value:.4g}"
 
 
 def _print_report(report) -> None:
+    from rich.table import Table
+
     table = Table("metric", f"generated ({report.generated_count})", f"ground truth ({report.ground_truth_count})")
     rows = [
         ("BeatAlign (higher is better)", report.beat_align, report.ground_truth_beat_align),

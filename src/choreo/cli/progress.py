@@ -7,7 +7,6 @@ import time
 from typing import Callable, Iterator
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 stderr_console = Console(stderr=True, soft_wrap=True)  # one message, one line, whatever the width
 LOG_INTERVAL = 30.0  # seconds between plain progress lines when stderr is not a terminal
@@ -21,6 +20,8 @@ def progress_bar(description: str, total: float | None = None) -> Iterator[Calla
     Off a terminal (logs, batch jobs) the bar is hidden and a plain line is printed at most every
     ``LOG_INTERVAL`` seconds instead, so a job run under nohup still shows that it is alive.
     """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
     columns = [TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("{task.fields[item]}"), TimeElapsedColumn(), TimeRemainingColumn()]
     with Progress(*columns, console=stderr_console, transient=False, disable=not stderr_console.is_terminal) as bar:
