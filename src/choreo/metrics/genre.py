@@ -1,7 +1,7 @@
 """A genre classifier on motion alone, for style adherence: does a dance asked to be a waltz
 look like the waltzes of the data?
 
-Multinomial logistic regression on the FID features of a clip (72 kinetic + 33 geometric,
+Multinomial logistic regression on the FID features of a clip (72 kinetic + 32 geometric,
 standardised), classes weighted by their inverse frequency so a genre with few clips still
 counts. Trained on real motion; its accuracy on real test clips says how much a "recognised as
 the requested genre" share can be trusted.
@@ -19,7 +19,7 @@ from .fid import motion_features
 
 
 def clip_features(positions: Sequence[np.ndarray]) -> np.ndarray:
-    """(N, 105) kinetic + geometric features, one row per clip of (T, 24, 3) joint positions."""
+    """(N, 104) kinetic + geometric features, one row per clip of (T, 24, 3) joint positions."""
     return np.stack([np.concatenate(motion_features(p)) for p in positions]).astype(np.float64)
 
 
