@@ -63,3 +63,23 @@ def test_two_processes_train_like_one(tmp_path):
                                 str(tmp_path / "two" / "last.pt"), "--steps", "2"], env=env, capture_output=True, text=True)
     assert generated.returncode == 0, generated.stderr
     assert (tmp_path / "d.npz").stat().st_size > 0
+
+
+def test_every_training_flag_reaches_the_checkpoint(tmp_path):
+    """`choreo train sgmd` flags land in the configurations the checkpoint records (each one
+    differs from its default, so a flag dropped on the way shows)."""
+    out = tmp_path / "run"
+    flags = ["--steps", "1", "--batch-size", "2", "--checkpoint-every", "1", "--prompt", "onehot", "--seed", "3",
+             "--style-mode", "concat", "--style-init", "zero", "--style-dropout", "0.2", "--mirror", "--stretch", "1,1.1",
+             "--turns", "0,90", "--genre-balance", "0.25", "--no-rhythm", "--prediction", "v", "--sigma-data", "0.5",
+             "--snr-gamma", "5", "--reconstruction-weight", "6"]
+    command = [*CHOREO, "train", "sgmd", "--data", str(FIXTURES), "--out", str(out), "--config", "tiny", *flags]
+    subprocess.run(command, check=True, capture_output=True, timeout=300)
+    state = load_checkpoint(out / "last.pt")
+    model, diffusion, train = state["model_config"], state["diffusion_config"], state["train_config"]
+    assert (model["style_mode"], model["style_init"], model["music_dim"], model["latent_dim"]) == ("concat", "zero", 35, 32)
+    assert (diffusion["style_dropout"], diffusion["prediction"], diffusion["sigma_data"], diffusion["snr_gamma"],
+            diffusion["reconstruction_weight"]) == (0.2, "v", 0.5, 5.0, 6.0)
+    assert (train["max_steps"], train["batch_size"], train["checkpoint_every"], train["validation_every"],
+            train["seed"], train["prompt_kind"], train["mirror"], list(train["stretch"]), list(train["turns"]),
+            train["genre_balance"]) == (1, 2, 1, 1, 3, "onehot", True, [1.0, 1.1], [0.0, 90.0], 0.25)

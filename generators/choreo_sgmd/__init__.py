@@ -36,7 +36,8 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
         "style_mode": options.style_mode, "style_init": options.style_init,
         "music_dim": FEATURE_DIM if options.rhythm is False else None}))
     diffusion = DiffusionConfig(**given({"style_dropout": options.style_dropout, "prediction": options.prediction,
-                                         "snr_gamma": options.snr_gamma, "sigma_data": options.sigma_data}))
+                                         "snr_gamma": options.snr_gamma, "sigma_data": options.sigma_data,
+                                         "reconstruction_weight": options.reconstruction_weight}))
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]

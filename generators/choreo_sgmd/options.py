@@ -60,3 +60,4 @@ class TrainOptions:
     prediction: str | None = None
     sigma_data: float | None = None
     snr_gamma: float | None = None
+    reconstruction_weight: float | None = None  # the x0 term's weight (EDGE: 0.636), the one term on every rotation

@@ -31,6 +31,7 @@ def train(
     prediction: Optional[str] = typer.Option(None, help="sgmd: what the network predicts, x0 (default) or v."),
     sigma_data: Optional[float] = typer.Option(None, help="sgmd with --prediction v: the data's standard deviation the skip assumes (default 1)."),
     snr_gamma: Optional[float] = typer.Option(None, help="sgmd: weigh each window's loss by min(SNR, this) (min-SNR; default 0: off)."),
+    reconstruction_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the x0 reconstruction loss (default 0.636, EDGE's)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
@@ -58,7 +59,7 @@ def train(
     given = {"config": config, "steps": steps, "batch_size": batch_size, "prompt": prompt, "style_mode": style_mode,
              "style_init": style_init, "style_dropout": style_dropout, "checkpoint_every": checkpoint_every, "seed": seed,
              "mirror": mirror, "genre_balance": genre_balance, "rhythm": rhythm, "prediction": prediction,
-             "sigma_data": sigma_data, "snr_gamma": snr_gamma,
+             "sigma_data": sigma_data, "snr_gamma": snr_gamma, "reconstruction_weight": reconstruction_weight,
              "stretch": None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18"),
              "turns": None if turns is None else _numbers("--turns", turns, "0,90,180,270")}
     options = parse_options(generator, plugin.train_options, {k: v for k, v in given.items() if v is not None})
