@@ -44,12 +44,14 @@ PLUGINS = ("choreo_sgmd", "choreo_graph")
 
 AREAS: dict[str, Area] = {
     "metrics": Area(("src/choreo/metrics/*",),
-                    ("tests/test_metric_values.py", "tests/test_metrics.py", "tests/test_metric_edges.py"),
+                    ("tests/test_metric_values.py", "tests/test_metrics.py", "tests/test_metric_edges.py",
+                     "tests/test_metric_survivors.py"),
                     skip="not with_a_warning"),  # they check the warning names the caller's line: mutmut's trampoline is one frame more
     "constraints": Area(("src/choreo/constraints/*",), ("tests/test_constraints.py",),
                         skip="not ddpm and not preview"),  # 100 s and 20 s; the ddim case and the CLI stay
     "motion": Area(("src/choreo/motion/*",),
-                   ("tests/test_motion.py", "tests/test_augment.py", "tests/test_skeleton.py", "tests/test_metric_values.py",
+                   ("tests/test_motion.py", "tests/test_augment.py", "tests/test_skeleton.py", "tests/test_motion_survivors.py",
+                    "tests/test_metric_values.py",
                     "tests/test_metric_edges.py", "tests/test_sgmd_controls.py", "tests/test_graph.py"),
                    skip="not training and not cli and not checkpoints"),
     "formats": Area(("src/choreo/formats/*",),
@@ -57,7 +59,8 @@ AREAS: dict[str, Area] = {
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
     "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/test_spectrum.py",)),
     "finishing": Area(("src/choreo/finishing/*",),
-                      ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py")),
+                      ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py",
+                       "tests/test_finishing_survivors.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
                           ("tests/test_sgmd_sampling.py", "tests/test_sgmd_controls.py", "tests/test_sgmd.py"),
                           skip="not training and not free_text and not batch and not generate_ and not inference"
