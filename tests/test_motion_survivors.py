@@ -1,6 +1,7 @@
 """Gaps found by the motion area's mutation run (docs/mutation.md): boundaries, refusal texts,
 dtypes, the chunking contract, metadata copies and the stitching frames, each pinned by a
-hand-made case, a closed form or scipy."""
+hand-made case, a closed form or scipy. (No test name may contain "cli", "training" or
+"checkpoints": the motion area's mutation run leaves those out by name.)"""
 
 import re
 
@@ -252,7 +253,7 @@ def test_resample_to_the_slowest_rate_and_refusals():
             counting_motion(3).resample(fps)
 
 
-def test_sample_frames_clamps_to_the_clip():
+def test_sample_frames_clamps_to_the_first_and_last_frame():
     angles = np.deg2rad(10.0) * np.arange(5)
     rotations = np.tile([1.0, 0, 0, 0], (5, 24, 1))
     rotations[:, 0] = Rotation.from_euler("y", angles[:, None]).as_quat(scalar_first=True)
@@ -286,7 +287,7 @@ def test_turns_add_up_in_the_metadata_and_keep_the_rest():
 
 # -- beats and contacts on short clips -----------------------------------------------------------
 
-def test_clips_too_short_for_a_beat_have_an_empty_integer_array():
+def test_dances_too_short_for_a_beat_have_an_empty_integer_array():
     for frames in [0, 1, 2]:
         beats = motion_beats(np.zeros((frames, 24, 3)))
         assert beats.shape == (0,) and beats.dtype.kind == "i", frames
