@@ -37,15 +37,7 @@ from choreo.metrics.evaluate import _mean_of, score_dance
 from choreo.metrics.pfc import to_z_up
 from choreo.metrics.reference_loops import random_dances
 from choreo.motion import Motion
-
-
-def pulsing_positions(frames: int, period: float) -> np.ndarray:
-    """A body gliding along x whose speed dips every ``period`` frames (motion beats there)."""
-    t = np.arange(frames)
-    speed = 1.05 - np.cos(2 * np.pi * t / period)
-    positions = np.zeros((frames, 24, 3))
-    positions[..., 0] = np.cumsum(speed)[:, None] * 0.01
-    return positions
+from tests.test_metric_edges import pulsing_positions
 
 
 @contextlib.contextmanager
