@@ -16,7 +16,6 @@ to the loudest frame) and chroma uses tuning 0 instead of a per-file tuning esti
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
@@ -24,6 +23,7 @@ import numpy as np
 
 from ..errors import AudioError
 from .audio import MIN_DURATION, SILENCE_RMS
+from .chroma import chroma_cens
 from .beats import BEAT_HOP, beat_frames_at, estimate_beats, onset_envelopes, onset_peaks
 from .spectrum import mel_power, mfcc, onset_strength, power_to_db
 
@@ -58,23 +58,15 @@ def frame_features(samples: np.ndarray, sr: int = SAMPLE_RATE, hop_length: int =
     """(F, 33) onset envelope, MFCC and chroma_cens for centred frames at every ``hop_length``.
 
     F = 1 + len(samples) // hop_length, as librosa frames a signal with center=True. Without
-    ``timbre`` the MFCC and chroma columns are zeros and librosa is never imported (seconds saved
-    in a fresh process by commands that need only the rhythm: render, eval, ChoreoGraph).
+    ``timbre`` the MFCC and chroma columns are zeros and the constant-Q transform is skipped (the
+    commands that need only the rhythm: render, eval, ChoreoGraph).
     """
-    with warnings.catch_warnings():  # librosa warns on the short final block; padding handles it
-        warnings.filterwarnings("ignore", message="n_fft=.* is too large")
-        return _frame_features(samples, sr, hop_length, timbre)
-
-
-def _frame_features(samples: np.ndarray, sr: int, hop_length: int, timbre: bool) -> np.ndarray:
     log_mel = power_to_db(mel_power(samples, sr, 2048, hop_length, 128))  # librosa's melspectrogram defaults
     onset = onset_strength(log_mel, 2048, hop_length)
     if not timbre:
         return np.concatenate([onset[:, None], np.zeros((len(onset), N_MFCC + N_CHROMA))], axis=1).astype(np.float32)
-    import librosa  # only the chroma needs it (a constant-Q transform); its first use costs seconds
-
     cepstrum = mfcc(log_mel, N_MFCC)
-    chroma = librosa.feature.chroma_cens(y=samples, sr=sr, hop_length=hop_length, tuning=0.0, n_chroma=N_CHROMA)
+    chroma = chroma_cens(samples, sr, hop_length)
     frames = min(onset.shape[-1], cepstrum.shape[-1], chroma.shape[-1])
     return np.concatenate([onset[None, :frames], cepstrum[:, :frames], chroma[:, :frames]], axis=0).T.astype(np.float32)
 

@@ -33,7 +33,7 @@ class Music:
             (``log_mel=True``: the same decode feeds both); None otherwise.
         timbre: whether the features' MFCC and chroma columns were computed (``timbre=False`` at
             analysis leaves them at zero: commands and backends that read only the rhythm and
-            the log-mel skip the constant-Q transform, and librosa, entirely).
+            the log-mel skip the constant-Q transform).
     """
 
     path: Path | None

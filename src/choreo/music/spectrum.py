@@ -3,7 +3,7 @@
 Why not librosa's: its spectral module compiles numba kernels and imports scipy.signal on first
 use, several seconds in every fresh process, and the beats, the onset envelope, the MFCCs and
 ChoreoGraph's log-mel need nothing more than a windowed FFT and a filter bank. (The chroma of the
-35-d features still comes from librosa: it needs a constant-Q transform.)
+35-d features, a constant-Q transform, is choreo.music.chroma.)
 """
 
 from __future__ import annotations
