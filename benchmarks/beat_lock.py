@@ -50,6 +50,7 @@ def beat_profile(joint_positions: np.ndarray) -> np.ndarray:
 
 
 SGMD_CHECKPOINT: Path | None = None  # --sgmd-checkpoint: score another SGMD model than the bundled one
+SEED = 0  # --seed: another take of every dance (the lock shares move by several points from take to take)
 
 
 def generators() -> dict:
@@ -67,10 +68,10 @@ BEAT_ALIGN: dict[str, list[float]] = {}  # each dancer's BeatAlign against the m
 
 
 def generated(backends: dict, music: Music, where: str) -> dict[str, np.ndarray]:
-    """Each backend's dance (seed 0), as it comes and after the beat lock: beat profiles."""
+    """Each backend's dance (seed SEED), as it comes and after the beat lock: beat profiles."""
     profiles = {}
     for name, backend in backends.items():
-        motion = backend.generate(GenerationRequest(music, seed=0))
+        motion = backend.generate(GenerationRequest(music, seed=SEED))
         started = time.perf_counter()
         locked = beat_lock(motion, music.beat_frames).motion
         LOCK_SECONDS.append((time.perf_counter() - started, motion.duration))
@@ -156,9 +157,10 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--m2d", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "data" / "m2d")
     parser.add_argument("--sgmd-checkpoint", type=Path, help="an SGMD checkpoint to score instead of the bundled one")
+    parser.add_argument("--seed", type=int, default=0, help="the generators' seed (another take of every dance)")
     args = parser.parse_args()
-    global SGMD_CHECKPOINT
-    SGMD_CHECKPOINT = args.sgmd_checkpoint
+    global SGMD_CHECKPOINT, SEED
+    SGMD_CHECKPOINT, SEED = args.sgmd_checkpoint, args.seed
     started = time.perf_counter()
     outside = dance_outside_songs(args.seconds)
     if not outside:
