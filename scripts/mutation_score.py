@@ -47,8 +47,9 @@ AREAS: dict[str, Area] = {
                     ("tests/test_metric_values.py", "tests/test_metrics.py", "tests/test_metric_edges.py",
                      "tests/test_metric_survivors.py"),
                     skip="not with_a_warning"),  # they check the warning names the caller's line: mutmut's trampoline is one frame more
-    "constraints": Area(("src/choreo/constraints/*",), ("tests/test_constraints.py",),
-                        skip="not ddpm and not preview"),  # 100 s and 20 s; the ddim case and the CLI stay
+    "constraints": Area(("src/choreo/constraints/*",), ("tests/test_constraint_units.py", "tests/test_constraints.py"),
+                        skip="not masked_sampling and not root_path_is_followed and not controllable_commands"
+                             " and not give_one_line and not generate_preview and not fuzz"),  # sampling, CLI, hypothesis
     "motion": Area(("src/choreo/motion/*",),
                    ("tests/test_motion.py", "tests/test_augment.py", "tests/test_skeleton.py", "tests/test_motion_survivors.py",
                     "tests/test_metric_values.py",

@@ -25,8 +25,9 @@ def displace_to_constraints(frames: np.ndarray, values: np.ndarray, mask: np.nda
     for sequence, given, known in zip(flat_out, flat_values, flat_mask):
         for channel in np.flatnonzero(known.any(0)):
             at = np.flatnonzero(known[:, channel])
-            anchors, offsets = offset_anchors(at, given[at, channel] - sequence[at, channel], reach)
-            sequence[:, channel] += np.interp(time, anchors, offsets)
+            if reach > 0:  # reach 0: only the given frames move (a plain overwrite)
+                anchors, offsets = offset_anchors(at, given[at, channel] - sequence[at, channel], reach)
+                sequence[:, channel] += np.interp(time, anchors, offsets)
             sequence[at, channel] = given[at, channel]
     return out
 

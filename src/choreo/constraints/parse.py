@@ -42,7 +42,7 @@ def parse_joints(text: str) -> tuple[int, ...]:
     joints = []
     for item in key.split(","):
         item = item.strip()
-        if item.isdigit() and int(item) < len(JOINT_NAMES):
+        if item.isascii() and item.isdigit() and int(item) < len(JOINT_NAMES):  # '²'.isdigit() is true too
             joints.append(int(item))
         elif item in JOINT_NAMES:
             joints.append(JOINT_NAMES.index(item))
