@@ -57,7 +57,7 @@ AREAS: dict[str, Area] = {
                    skip="not training and not cli and not checkpoints"),
     "formats": Area(("src/choreo/formats/*",),
                     ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py", "tests/test_format_edges.py",
-                     "tests/test_gltf.py", "tests/test_rigs.py", "tests/test_fbx.py"),
+                     "tests/test_gltf.py", "tests/test_rigs.py", "tests/test_fbx.py", "tests/test_format_survivors.py"),
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
     "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/test_spectrum.py",)),
     "finishing": Area(("src/choreo/finishing/*",),

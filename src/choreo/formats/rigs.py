@@ -296,12 +296,33 @@ def _match_bones(data, rig: Rig, name: str) -> list[int]:
     return index
 
 
+def _hips_in_world(data, rotations: np.ndarray, root: np.ndarray, hips: int) -> tuple[np.ndarray, np.ndarray]:
+    """(T, J, 3, 3) rotations with the hips' own made world, and (T, 3) the hips' world position.
+
+    Exporters may nest the hips under joints the rig does not name (Blender's "Armature", often
+    turned to change the up axis); their offsets and rotations are composed into the hips', so the
+    dance keeps the file's world pose instead of losing them silently."""
+    chain = [hips]
+    while data.joints[chain[-1]].parent >= 0:
+        chain.append(data.joints[chain[-1]].parent)
+    if len(chain) == 1:
+        return rotations, root
+    world, position = rotations[:, chain[-1]], root
+    for joint in reversed(chain[:-1]):  # from below the file's root down to the hips
+        position = position + world @ np.asarray(data.joints[joint].offset, dtype=np.float64)
+        world = world @ rotations[:, joint]
+    rotations = rotations.copy()
+    rotations[:, hips] = world
+    return rotations, position
+
+
 def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto") -> Motion:
     """Read a BVH on ``rig`` (as :func:`write_bvh_rig` writes, or any with the rig's bone names) as an SMPL-24 Motion.
 
     Rotations are re-expressed against the SMPL-24 template's rest directions (the inverse of the
     rest correction), so joint positions are the file's; SMPL's hand tips come from the hands' End
-    Sites (or the template's, when the file has none). Joints the rig does not name are ignored.
+    Sites (or the template's, when the file has none). Joints the rig does not name are ignored, but
+    the transforms of those above the hips are composed into the hips'.
     """
     rig = get_rig(rig)
     data = read_bvh_raw(path)
@@ -309,6 +330,7 @@ def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto
     if len(data.values) == 0:
         raise MotionFormatError(f"{path}: no frames")
     rotmats_file, root = _local_rotations(data)
+    rotmats_file, root = _hips_in_world(data, rotmats_file, root, index[0])
     local = rotmats_file[:, index]
     offsets = np.array([data.joints[j].offset for j in index])
     offsets[0] = 0.0
