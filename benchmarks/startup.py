@@ -101,6 +101,7 @@ def batch_against_sampling(folder: Path) -> None:
     songs = folder / "batch"
     songs.mkdir()
     paths = [write_song(songs, 20.0 + i) for i in range(BATCH_SONGS)]  # 20-39 s, one file each
+    (folder / "out").mkdir()
     wall, cpu = run_once(["generate", *paths, "--out-dir", folder / "out"])
     generator, sampling = SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT), 0.0
     generator.generate(GenerationRequest(Music.from_file(paths[0]), seed=0))  # warm-up
