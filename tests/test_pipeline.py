@@ -68,6 +68,15 @@ def test_importing_choreo_does_not_import_torch_or_librosa():
     assert done.stdout.split() == ["False", "False"]
 
 
+def test_loading_the_default_sgmd_model_imports_neither_librosa_nor_sympy():
+    """The weights are checked against a layout on torch's meta device; drawing random values
+    there imports torch's reference decompositions and sympy (about 3 s per process, measured)."""
+    code = ("import sys, choreo_sgmd; from choreo_sgmd.generator import SGMDGenerator; "
+            "SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT); print('sympy' in sys.modules, 'librosa' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["False", "False"]
+
+
 def test_options_a_backend_lacks_are_refused_before_the_song_is_read(tiny_checkpoint, tmp_path):
     from choreo.errors import ParameterError
 

@@ -31,7 +31,10 @@ class RotaryEmbedding(nn.Module):
 
     def __init__(self, head_dim: int, base: float = 10_000.0):
         super().__init__()
-        self.register_buffer("inv_freq", 1.0 / base ** (torch.arange(0, head_dim, 2).float() / head_dim), persistent=False)
+        # computed on the CPU even under torch.device("meta") (check_weights_fit): arithmetic on meta
+        # tensors imports torch's reference decompositions and sympy, seconds in every fresh process
+        steps = torch.arange(0, head_dim, 2, device="cpu").float()
+        self.register_buffer("inv_freq", 1.0 / base ** (steps / head_dim), persistent=False)
         self._cache: dict[tuple[int, torch.device], torch.Tensor] = {}
 
     def rotations(self, length: int, device: torch.device) -> torch.Tensor:
@@ -170,7 +173,9 @@ class Denoiser(nn.Module):
         self.music_encoder = nn.ModuleList(EncoderLayer(config) for _ in range(config.music_layers))
         self.time_mlp = nn.Sequential(nn.Linear(d, d), nn.SiLU(), nn.Linear(d, d))
         self.music_pool_mlp = nn.Sequential(nn.LayerNorm(d), nn.Linear(d, d), nn.SiLU(), nn.Linear(d, d))
-        self.null_music = nn.Parameter(torch.randn(1, 1, d) * 0.02)  # stands in for "no music"
+        self.null_music = nn.Parameter(torch.empty(1, 1, d))  # stands in for "no music"
+        if self.null_music.device.type != "meta":  # a layout only (check_weights_fit): drawing there
+            nn.init.normal_(self.null_music, std=0.02)  # imports sympy, seconds per process; = randn * 0.02
         self.null_style = nn.Parameter(torch.zeros(1, config.style_dim))
         self.layers = nn.ModuleList(DecoderLayer(config) for _ in range(config.num_layers))
         self.final_norm = nn.LayerNorm(d)
