@@ -772,3 +772,10 @@ def test_assemble_places_runs_and_crossfades_jumps(blend):
     root = motions[0].root_positions
     assert np.linalg.norm(out.root_positions[30] - out.root_positions[29]) == pytest.approx(
         np.linalg.norm(0.5 * (root[40] + root[41]) - root[39]), abs=1e-9)
+
+
+def test_a_query_too_long_for_its_reference_is_a_clear_error():
+    """No monotone path of slopes 1/2 to 2 fits 6 query frames into 2 reference frames."""
+    with pytest.raises(ValueError, match="no path through 2 reference frames"):
+        subsequence_dtw(np.zeros((1, 6)), np.zeros((1, 2)))
+    assert subsequence_dtw(np.zeros((1, 3)), np.zeros((1, 2))).shape == (1, 3)  # 3 into 2 still fits

@@ -48,6 +48,9 @@ def subsequence_dtw(queries: np.ndarray, references: np.ndarray) -> np.ndarray:
         np.subtract(queries[:, i : i + 1], references, out=total[i, :, 2:])
         np.abs(total[i, :, 2:], out=total[i, :, 2:])
         total[i, :, 2:] += best
+    if not np.isfinite(total[-1, :, 2:].min()):
+        raise ValueError(f"a query of {n} frames has no path through {m} reference frames "
+                         "(each step advances the query by at most 2 frames per reference frame)")
     return _backtrack(total[-1, :, 2:].argmin(1), step, n)
 
 
