@@ -1283,3 +1283,9 @@ def test_writing_several_files_with_a_format_and_a_rig(dance, tmp_path):
     rigged = [str(tmp_path / "c.bvh")]
     registry.write_motions(dance, rigged, rig="mixamo")
     assert bvh.read_bvh_raw(rigged[0]).joints[0].name == "mixamorig:Hips"
+
+
+def test_a_bvh_without_channels_is_named_as_such():
+    text = "HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION\nFrames: 1\nFrame Time: 0.5\n\n"
+    with pytest.raises(MotionFormatError, match=r"^x.bvh: no joint has CHANNELS, so its 1 frames hold no motion$"):
+        bvh.parse_bvh(text, "x.bvh")

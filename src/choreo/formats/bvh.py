@@ -146,6 +146,8 @@ def parse_bvh(text: str, name: str = "BVH") -> BvhData:
     joints = _parse_hierarchy(head, name)
     frame_count, frame_time, rows, first_row_line = _parse_motion_header(motion_part, name, text.count("\n", 0, len(head)) + 1)
     num_channels = sum(len(j.channels) for j in joints)
+    if num_channels == 0 and frame_count:  # its frame rows would be empty lines: nothing can move
+        raise MotionFormatError(f"{name}: no joint has CHANNELS, so its {frame_count} frames hold no motion")
     if len(rows) < frame_count:
         raise MotionFormatError(f"{name}: truncated, {len(rows)} of {frame_count} frames present")
     try:
