@@ -615,3 +615,14 @@ def test_a_superscript_digit_is_an_unknown_joint():
 def test_reach_zero_moves_only_the_given_frames():
     moved = one_channel(10, {2: 5.0, 7: 10.0}, reach=0)
     assert moved.tolist() == [0, 0, 5, 0, 0, 0, 0, 10, 0, 0]
+
+
+def test_a_pose_file_with_at_in_its_path(tmp_path):
+    """'takes@2/pose.bvh' is a file, not frame '2/pose.bvh' of 'takes'; a frame still follows a last @."""
+    folder = tmp_path / "takes@2"
+    folder.mkdir()
+    write_motion(numbered_motion(4), folder / "pose.bvh")
+    assert read_pose(str(folder / "pose.bvh")).root_positions[0, 0] == pytest.approx(0.0, abs=1e-6)
+    assert read_pose(f"{folder / 'pose.bvh'}@2").root_positions[0, 0] == pytest.approx(2.0, abs=1e-6)
+    with pytest.raises(ParameterError, match="the part after @ must be a frame number"):
+        read_pose(f"{folder / 'pose.bvh'}@two")

@@ -98,7 +98,7 @@ def read_pose(spec: str) -> Motion:
     from ..formats import read_motion
 
     path, frame = spec, 0
-    if "@" in spec:
+    if "@" in spec and not Path(spec).is_file():  # a file may have @ in its own path
         path, _, index = spec.rpartition("@")
         try:
             frame = int(index)
