@@ -40,22 +40,19 @@ MIXAMO_BONES = {
     "Hips": (None, "pelvis", None), "Spine": ("Hips", "spine1", "spine2"), "Spine1": ("Spine", "spine2", "spine3"),
     "Spine2": ("Spine1", "spine3", "neck"), "Neck": ("Spine2", "neck", "head"), "Head": ("Neck", "head", None),
 }  # fmt: skip
-for _side in ("Left", "Right"):
-    _s = _side[0].lower()
-    MIXAMO_BONES.update({
-        f"{_side}Shoulder": ("Spine2", f"{_s}_collar", f"{_s}_shoulder"),
-        f"{_side}Arm": (f"{_side}Shoulder", f"{_s}_shoulder", f"{_s}_elbow"),
-        f"{_side}ForeArm": (f"{_side}Arm", f"{_s}_elbow", f"{_s}_wrist"),
-        f"{_side}Hand": (f"{_side}ForeArm", f"{_s}_wrist", f"{_s}_hand"),
-    })
-for _side in ("Left", "Right"):
-    _s = _side[0].lower()
-    MIXAMO_BONES.update({
-        f"{_side}UpLeg": ("Hips", f"{_s}_hip", f"{_s}_knee"),
-        f"{_side}Leg": (f"{_side}UpLeg", f"{_s}_knee", f"{_s}_ankle"),
-        f"{_side}Foot": (f"{_side}Leg", f"{_s}_ankle", f"{_s}_foot"),
-        f"{_side}ToeBase": (f"{_side}Foot", f"{_s}_foot", None),
-    })
+# each limb chain as (bone, parent, head joint, aim joint), "{S}" the side and "{s}" its initial;
+# both arms come before both legs, as in the table
+LIMBS = (
+    (("{S}Shoulder", "Spine2", "{s}_collar", "{s}_shoulder"), ("{S}Arm", "{S}Shoulder", "{s}_shoulder", "{s}_elbow"),
+     ("{S}ForeArm", "{S}Arm", "{s}_elbow", "{s}_wrist"), ("{S}Hand", "{S}ForeArm", "{s}_wrist", "{s}_hand")),
+    (("{S}UpLeg", "Hips", "{s}_hip", "{s}_knee"), ("{S}Leg", "{S}UpLeg", "{s}_knee", "{s}_ankle"),
+     ("{S}Foot", "{S}Leg", "{s}_ankle", "{s}_foot"), ("{S}ToeBase", "{S}Foot", "{s}_foot", None)),
+)  # fmt: skip
+for _chain in LIMBS:
+    for _side in ("Left", "Right"):
+        for _bone, _parent, _joint, _aim in _chain:
+            _fill = lambda text: None if text is None else text.format(S=_side, s=_side[0].lower())  # noqa: E731
+            MIXAMO_BONES[_fill(_bone)] = (_fill(_parent), _fill(_joint), _fill(_aim))
 
 
 def test_mixamo_table_names_tree_joints_and_aims():
