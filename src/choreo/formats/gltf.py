@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MotionFormatError
+from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion
 from ..skeleton import SMPL24
 from .bvh import END_SITES
@@ -212,6 +212,8 @@ def read_glb(path: str | Path) -> Motion:
         return _motion_of(gl, document, path)
     except (IndexError, KeyError, TypeError, ValueError, AttributeError) as error:  # indices and sizes a damaged file got wrong
         raise MotionFormatError(f"{path}: damaged glb ({type(error).__name__}: {str(error)[:100]})") from None
+    except ParameterError as error:  # values a motion cannot have (a key spacing outside 1-1000 fps)
+        raise MotionFormatError(f"{path}: {error}") from None
 
 
 def _motion_of(gl, document, path) -> Motion:
