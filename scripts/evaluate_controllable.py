@@ -1,6 +1,7 @@
 """Controllable generation scored like the SGMD paper's Table III, on the M2D test windows.
 
     python scripts/evaluate_controllable.py CHECKPOINT [--steps 20] [--guidance 2] [--tasks trajectory ...]
+    python scripts/evaluate_controllable.py --generator graph [--path-cost 4] [--key-cost 4]
 
 For every 5 s test window the real motion supplies the constraints of each task (a root path,
 the first two frames, the first and last frames, a random 70 % of frames, the lower body, the upper
@@ -75,7 +76,10 @@ def border_frames(c: Constraints, reach: int = 2) -> np.ndarray:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("checkpoint")
+    parser.add_argument("checkpoint", nargs="?", help="default: the backend's bundled one")
+    parser.add_argument("--generator", default="sgmd", choices=("sgmd", "graph"))
+    parser.add_argument("--path-cost", type=float, default=None, help="graph: GraphConfig.path_cost")
+    parser.add_argument("--key-cost", type=float, default=None, help="graph: GraphConfig.key_cost")
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--guidance", type=float, default=2.0)
@@ -84,12 +88,18 @@ def main() -> None:
     parser.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
     parser.add_argument("--limit", type=int, default=None, help="score only the first N windows (smoke tests)")
     args = parser.parse_args()
-    generator = load_backend("sgmd", args.checkpoint)
+    generator = load_backend(args.generator, args.checkpoint)
     scoring = ScoringSet.from_clips(load_dataset(args.data))
     windows, train = scoring.windows[: args.limit], scoring.reference
     real = [w.motion for w in windows]
-    print(f"{Path(args.checkpoint).name} (step {generator.trained_steps}), DDIM {args.steps}, w = {args.guidance:g}, "
-          f"{len(windows)} M2D test windows\n")
+    if args.generator == "sgmd":
+        options = {"steps": args.steps, "guidance": args.guidance, "resample": args.resample}
+        setting = f"{generator.checkpoint.name} (step {generator.trained_steps}), DDIM {args.steps}, w = {args.guidance:g}"
+    else:
+        options = {k: v for k, v in (("path_cost", args.path_cost), ("key_cost", args.key_cost)) if v is not None}
+        setting = f"graph {generator.checkpoint_name} + {generator.repertoire_name}, {options or 'default costs'}"
+    log_mels = scoring.log_mels() if generator.listens_to_spectrum else None
+    print(f"{setting}, {len(windows)} M2D test windows\n")
     print("| task | BeatAlign | PFC | FID_k | FID_g | Div_k | Div_g | max error at fixed joints (cm) | "
           "root path error (cm) | border jerk / real |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
@@ -97,8 +107,8 @@ def main() -> None:
         started = time.time()
         rng = np.random.default_rng(args.seed)
         constraints = [task_constraints(task, m, rng) for m in real]
-        motions = generate_window_motions(generator, windows, seed=args.seed, constraints=constraints,
-                                          options={"steps": args.steps, "guidance": args.guidance, "resample": args.resample})
+        motions = generate_window_motions(generator, windows, seed=args.seed, constraints=constraints, options=options,
+                                          log_mels=log_mels)
         errors, path_errors, jerk_gen, jerk_real = [], [], [], []
         dances = []
         for window, motion, truth, c in zip(windows, motions, real, constraints):
@@ -117,7 +127,11 @@ def main() -> None:
         ratio = np.nanmean(np.concatenate(jerk_gen)) / np.nanmean(np.concatenate(jerk_real)) if jerk_gen else None
         values = (report.beat_align, report.pfc, report.fid_k, report.fid_g, report.div_k, report.div_g,
                   100 * max(errors) if errors else None, 100 * np.mean(path_errors) if path_errors else None, ratio)
-        print(f"| {task} | " + " | ".join(fmt(v) for v in values) + f" | <!-- {time.time() - started:.0f} s -->", flush=True)
+        walked = [m.metadata.get("walk_root_error_m") for m in motions]
+        walked = [w for w in walked if w is not None]
+        note = f", walk's own root error {100 * np.mean(walked):.1f} cm" if walked else ""
+        print(f"| {task} | " + " | ".join(fmt(v) for v in values) + f" | <!-- {time.time() - started:.0f} s{note} -->",
+              flush=True)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ import choreo.constraints as constraints_package
 from choreo.constraints import (ALL_JOINTS, JOINT_SETS, Constraints, as_smpl, parse_frame_range, parse_joints,
                                 parse_style_schedule, parse_time_key, path_to_frames, read_pose, read_root_path)
 from choreo.constraints import parse as parse_module
-from choreo.constraints.displacement import REACH_FRAMES, displace_to_constraints, offset_anchors
+from choreo.constraints.displacement import REACH_FRAMES, displace_motion, displace_to_constraints, offset_anchors
 from choreo.constraints.mask import check_joints
 from choreo.errors import ChoreoError, InputError, ParameterError
 from choreo.formats import write_motion
@@ -592,6 +592,35 @@ def test_displacement_per_sequence_and_channel_with_broadcast_values():
     moved = displace_to_constraints(frames, values, shared_mask, reach=2)
     np.testing.assert_allclose(moved[0, :, 1], [5, 2.5, 0, 0, 0, 0, 0, 0])
     np.testing.assert_allclose(moved[1, :, 2], [5, 3, 1, 1, 1, 1, 1, 1])
+
+
+def test_displace_motion_meets_the_constraints_and_bends_the_root_across_whole_gaps():
+    from choreo.skeleton.rotations import quaternion_multiply
+
+    frames = 100
+    axis_angle = np.zeros((frames, 24, 3))
+    axis_angle[:, 18, 2] = np.linspace(0, 1, frames)  # the left elbow bends over time
+    root = np.stack([np.zeros(frames), np.full(frames, 0.9), np.linspace(0, 1, frames)], -1)
+    motion = Motion.from_axis_angle(root, axis_angle, fps=30.0)
+    given = Constraints.none(frames, 30.0)
+    given.root[[0, 99], 0] = [0.5, -0.5]  # x given on the first and last frames only
+    given.root_known[[0, 99], 0] = True
+    turned = motion.rotations[50].copy()
+    turned[18] = quaternion_multiply(np.array([np.cos(0.3), np.sin(0.3), 0, 0]), turned[18])
+    given.rotations[50], given.joints_known[50] = turned, True
+    bent = displace_motion(motion, given, root_reach=frames)
+    # root x: offsets +0.5 and -0.5 interpolated over the whole gap (x was 0 throughout)
+    np.testing.assert_allclose(bent.root_positions[:, 0], 0.5 - np.arange(frames) / 99, atol=1e-9)
+    np.testing.assert_allclose(bent.root_positions[:, 1:], motion.root_positions[:, 1:], atol=1e-12)
+    # the given rotation exactly; 15 frames away and beyond, the motion's own
+    np.testing.assert_allclose(np.abs((bent.rotations[50] * turned).sum(-1)), 1.0, atol=1e-9)
+    far = np.r_[0:35, 66:frames]
+    np.testing.assert_allclose(np.abs((bent.rotations[far] * motion.rotations[far]).sum(-1)), 1.0, atol=1e-9)
+    assert not np.allclose(np.abs((bent.rotations[45, 18] * motion.rotations[45, 18]).sum()), 1.0, atol=1e-6)
+    short = displace_motion(motion, given)  # the default reach: the root's offsets fade in 15 frames
+    np.testing.assert_allclose(short.root_positions[[0, 15, 50, 84, 99], 0], [0.5, 0, 0, 0, -0.5], atol=1e-9)
+    with pytest.raises(ValueError, match="constraints cover 100 frames, the motion 99"):
+        displace_motion(motion.slice_frames(0, 99), given)
 
 
 def test_offset_anchors_by_hand():

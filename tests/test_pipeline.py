@@ -87,8 +87,16 @@ def test_options_a_backend_lacks_are_refused_before_the_song_is_read(tiny_checkp
         choreo.dance(missing, checkpoint=tiny_checkpoint, options={"sampler": "euler"})
 
 
-def test_cli_refuses_constraints_for_the_graph_before_any_work(tmp_path, capsys, monkeypatch):
+def test_cli_refuses_constraints_a_backend_cannot_keep_before_any_work(tmp_path, capsys, monkeypatch):
+    # Both bundled backends take constraints; a plugin that declares it does not is refused first.
+    import dataclasses
+
+    import choreo.generator
     from choreo.cli import main
+
+    plugins = choreo.generator.available_plugins()
+    unconstrained = {**plugins, "graph": dataclasses.replace(plugins["graph"], constraints=False)}
+    monkeypatch.setattr(choreo.generator, "available_plugins", lambda: unconstrained)
 
     def analysed(*args, **kwargs):
         raise AssertionError("the song was analysed before the refusal")
@@ -96,7 +104,8 @@ def test_cli_refuses_constraints_for_the_graph_before_any_work(tmp_path, capsys,
     monkeypatch.setattr(Music, "from_file", analysed)
     code = main(["inbetween", str(SONG), "--start", "x.bvh", "-o", str(tmp_path / "o.bvh"), "--generator", "graph"])
     err = capsys.readouterr().err
-    assert code == 2 and "the graph backend does not take constraints" in err and not any(tmp_path.iterdir())
+    assert code == 2 and not any(tmp_path.iterdir())
+    assert err.strip().endswith("the graph backend does not take constraints (keys, seed motion, inpainting, a path); use sgmd")
 
 
 def test_a_backend_that_listens_to_the_spectrum_gets_it_from_the_one_decode(monkeypatch):

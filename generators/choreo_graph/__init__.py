@@ -87,4 +87,5 @@ plugin = GeneratorPlugin(
     default_checkpoint=DEFAULT_CHECKPOINT,
     options=GraphConfig,
     train_options=TrainOptions,
+    constraints=True,
 )

@@ -61,14 +61,18 @@ class GraphConfig:
     take_variation: float = 0.1  # seeds other than 0: each second's costs get noise of this x their spread
     repeat_cost: float = 100.0  # not in the paper: replaying source frames danced recently (see graph.py)
     repeat_memory: int = 30  # seconds a played node's source frames stay "recent"
+    path_cost: float = 4.0  # under constraints: per squared metre between a node's root and the given root
+    key_cost: float = 4.0  # under constraints: per squared metre of mean joint distance from a given pose
     dynamic: bool = True  # False: the paper's Motion Graph ablation (first node of each segment only)
     retempo: bool = True  # False: the "without re-tempo" ablation (middle 4 s, unwarped)
 
     def __post_init__(self):
         from choreo.errors import ParameterError
 
-        if self.top_k < 1 or self.blend_frames < 0 or self.dtw_stride < 1 or self.take_variation < 0 or self.warp_smoothing < 0:
-            raise ParameterError("top_k and dtw_stride must be >= 1; blend_frames, take_variation and warp_smoothing >= 0")
+        if (self.top_k < 1 or self.blend_frames < 0 or self.dtw_stride < 1 or self.take_variation < 0 or self.warp_smoothing < 0
+                or self.path_cost < 0 or self.key_cost < 0):
+            raise ParameterError("top_k and dtw_stride must be >= 1; blend_frames, take_variation, warp_smoothing, "
+                                 "path_cost and key_cost >= 0")
 
 
 @dataclass(frozen=True)

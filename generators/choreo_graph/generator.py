@@ -8,6 +8,8 @@ from typing import Callable
 
 import numpy as np
 
+from choreo.constraints import Constraints
+from choreo.constraints.displacement import displace_motion
 from choreo.errors import ParameterError
 from choreo.generator import GenerationRequest, Generator
 from choreo.generator.options import parse_options
@@ -16,6 +18,7 @@ from choreo.music.mel import music_log_mel
 
 from .config import NODE_FRAMES, GraphConfig
 from .graph import DynamicGraph, Node, assemble, music_windows, played_clips, select_candidates, warp_candidates
+from .guide import Guide
 from .model import ChoreoGraphModel, load_checkpoint
 from .repertoire import Repertoire
 
@@ -58,22 +61,34 @@ class ChoreoGraphGenerator(Generator):
         return self.repertoire.genre_mask(match), match
 
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
-        if request.constraints is not None:
-            raise ParameterError("the graph backend does not take constraints; use the sgmd commands")
         config = self.options(request)
         allowed, genre = self.allowed_clips(request.style)
         report = progress or (lambda fraction: None)
         mel = music_log_mel(request.music)
-        path = self.walk(mel, config, allowed, report, seed=request.seed or 0)
-        motion = self.assemble(path, mel, config)  # as many frames as the mel, i.e. the music
+        guide = self.guide(request.constraints, len(mel), config)
+        path = self.walk(mel, config, allowed, report, seed=request.seed or 0, guide=guide)
+        motion = self.assemble(path, mel, config, guide)  # as many frames as the mel, i.e. the music
+        walk_error = None if guide is None else guide.root_error(motion)
+        if guide is not None:  # what the walk did not reach exactly, bent onto the constraints
+            motion = displace_motion(motion, request.constraints, root_reach=len(mel))
         report(1.0)
         motion.metadata = {
             "generator": "graph", "checkpoint": self.checkpoint_name, "repertoire": self.repertoire_name,
             "style": request.style, "genre": genre, "seed": request.seed, "top_k": config.top_k,
             "dynamic_graph": config.dynamic, "retempo": config.retempo,
             "clips": played_clips(path, self.repertoire),
+            "constrained_fraction": None if guide is None else round(request.constraints.known_fraction(), 4),
+            "walk_root_error_m": None if walk_error is None else round(walk_error, 4),
         }  # fmt: skip
         return motion
+
+    def guide(self, constraints: Constraints | None, num_frames: int, config: GraphConfig) -> Guide | None:
+        """The walk's guide under ``constraints`` (None without any)."""
+        if constraints is None or constraints.is_empty:
+            return None
+        if constraints.num_frames != num_frames:
+            raise ParameterError(f"constraints cover {constraints.num_frames} frames, the song {num_frames}")
+        return Guide(constraints, self.repertoire, config)
 
     def dance(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
               progress: Callable[[float], None] = lambda fraction: None) -> Motion:
@@ -82,18 +97,20 @@ class ChoreoGraphGenerator(Generator):
         progress(1.0)
         return motion
 
-    def assemble(self, path: list[Node], mel: np.ndarray, config: GraphConfig) -> Motion:
-        return assemble(path, self.repertoire, config.blend_frames).slice_frames(0, len(mel))
+    def assemble(self, path: list[Node], mel: np.ndarray, config: GraphConfig, guide: Guide | None = None) -> Motion:
+        start = {} if guide is None else {"start": guide.start}
+        return assemble(path, self.repertoire, config.blend_frames, **start).slice_frames(0, len(mel))
 
     def walk(self, mel: np.ndarray, config: GraphConfig, allowed: np.ndarray | None = None,
-             progress: Callable[[float], None] = lambda fraction: None, seed: int = 0) -> list[Node]:
+             progress: Callable[[float], None] = lambda fraction: None, seed: int = 0,
+             guide: Guide | None = None) -> list[Node]:
         """The graph's path, one node per second of the (T, n_mels) log-mel.
 
         Seconds are processed in chunks (select, warp, then walk the graph through them), so only
         a chunk's candidates and warps are ever held, whatever the song's length.
         """
         seconds = max(1, math.ceil(len(mel) / NODE_FRAMES))
-        graph, path = DynamicGraph(self.repertoire, config, seed), []
+        graph, path = DynamicGraph(self.repertoire, config, seed, guide), []
         for first in range(0, seconds, CHUNK_SECONDS):
             chunk = range(first, min(seconds, first + CHUNK_SECONDS))
             windows = music_windows(self.model, mel, chunk)

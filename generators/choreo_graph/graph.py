@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -25,6 +26,9 @@ from .warp import warp_frames
 
 NODES_PER_SEGMENT = WINDOW_FRAMES // NODE_FRAMES  # 4
 REPEAT_OVERLAP = NODE_FRAMES // 4  # source frames two nodes may share before one repeats the other
+if TYPE_CHECKING:
+    from .guide import Guide
+
 WARP_CHUNK = 4096  # candidate pairs warped at once (bounds memory: ~4096 x 60 x 120 floats)
 
 
@@ -111,8 +115,8 @@ class DynamicGraph:
     ranking every second, and whose end joins its own start, is replayed second after second
     (a 30 s rumba excerpt got one node 24 times in a row)."""
 
-    def __init__(self, repertoire: Repertoire, config: GraphConfig, seed: int = 0):
-        self.repertoire, self.config = repertoire, config
+    def __init__(self, repertoire: Repertoire, config: GraphConfig, seed: int = 0, guide: "Guide | None" = None):
+        self.repertoire, self.config, self.guide = repertoire, config, guide
         self.rng = np.random.default_rng(seed) if seed and config.take_variation > 0 else None
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))
         self.current: Node | None = None
@@ -135,24 +139,30 @@ class DynamicGraph:
         index = t - segment_time
         first = np.rint(warps[np.arange(len(clips)), index * NODE_FRAMES]).astype(int)
         cost = np.zeros(len(clips))
+        follows = np.zeros(len(clips), bool)
         if config.dynamic:
             cost += config.style_cost * np.square(repertoire.style[clips] - music_style).sum(-1)
         if current is not None:
             pose = repertoire.poses[current.clip, int(round(current.frames[-1]))].astype(np.float32)
             step = np.square(repertoire.poses[clips, first].astype(np.float32) - pose).sum(-1).mean(-1)
             cost += config.transition_cost * step
+            follows = (segment_time == current.segment[0]) & (rank == current.segment[1]) & (index == current.index + 1)
             if config.dynamic:
                 completeness = np.ones(len(clips))
-                follows = (segment_time == current.segment[0]) & (rank == current.segment[1]) & (index == current.index + 1)
                 if follows.any():
                     own = warps[np.flatnonzero(follows)[0]]
                     completeness[follows] = completeness_cost(current, own, repertoire, config.completeness_scale)
                 cost += config.completeness_cost * completeness
         last = warps[np.arange(len(clips)), index * NODE_FRAMES + NODE_FRAMES - 1]
         cost += self.repeat_cost(t, source_spans(repertoire, clips, first, last))
+        if self.guide is not None:
+            played = warps[np.arange(len(clips))[:, None], (index * NODE_FRAMES)[:, None] + np.arange(NODE_FRAMES)]
+            cost += self.guide.cost(t, clips, played, follows, current)
         if self.rng is not None:  # another take: near-equal choices fall another way
             cost += config.take_variation * cost.std() * self.rng.standard_normal(len(cost))
         best = int(cost.argmin())
+        if self.guide is not None:
+            self.guide.chose(best)
         start = int(index[best]) * NODE_FRAMES
         self.current = Node((int(segment_time[best]), int(rank[best])), int(index[best]), int(clips[best]),
                             warps[best, start : start + NODE_FRAMES].copy())
@@ -219,9 +229,11 @@ def replayed_nodes(path: list[Node], repertoire: Repertoire, memory: int) -> int
     return sum(bool(replaying(spans[i : i + 1], spans[max(0, i - memory) : i])[0]) for i in range(1, len(path)))
 
 
-def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Motion:
+def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int,
+             start: tuple[np.ndarray, float] = (np.zeros(3), 0.0)) -> Motion:
     """Play the chosen nodes end to end: a segment runs on unbroken; a jump to another segment is
-    placed where the previous one would have gone next and cross-faded into it."""
+    placed where the previous one would have gone next and cross-faded into it. The first node
+    starts at ``start`` (root position, facing)."""
     clips: dict[int, Motion] = {}
     pieces, previous, placement = [], None, (0.0, np.zeros(3))
 
@@ -233,7 +245,7 @@ def assemble(path: list[Node], repertoire: Repertoire, blend_frames: int) -> Mot
     for node in path:
         piece = clip_motion(node.clip).sample_frames(node.frames)
         if previous is None:
-            placement = placement_onto(piece, np.zeros(3), 0.0)
+            placement = placement_onto(piece, *start)
             piece = turned_and_moved(piece, *placement)
         elif node.continues(previous):
             piece = turned_and_moved(piece, *placement)

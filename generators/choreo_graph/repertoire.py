@@ -19,8 +19,9 @@ from choreo.errors import InputError, MotionFormatError
 from choreo.fileio import atomic_path
 from choreo.formats.safe_arrays import load_npz
 from choreo.motion import Motion
-from choreo.motion.stitch import frame_local_positions, local_positions
+from choreo.motion.stitch import LEFT_HIP, RIGHT_HIP, frame_local_positions, heading_of, local_positions
 from choreo.skeleton import SMPL24
+from choreo.skeleton.rotations import quaternion_to_matrix
 
 from .config import CLIP_FRAMES, FPS, WINDOW_FRAMES
 from .data import beat_count, excerpt_starts
@@ -61,6 +62,13 @@ class Repertoire:
         sources, starts = zip(*(split(str(name)) for name in self.names))
         _, ids = np.unique(np.array(sources), return_inverse=True)
         return ids.astype(np.int64), np.array(starts, np.int64)
+
+    @cached_property
+    def facing(self) -> np.ndarray:
+        """(N, 240) each frame's heading about +y, as ``facing_yaw`` gives it from the joints: the
+        hips hang off the pelvis, so their left-right axis is the pelvis rotation's."""
+        across = self.offsets[LEFT_HIP] - self.offsets[RIGHT_HIP]
+        return heading_of(quaternion_to_matrix(self.rotations[:, :, 0]) @ across)
 
     def genre_mask(self, genre: str | None) -> np.ndarray:
         return np.ones(len(self), bool) if genre is None else self.genres == genre

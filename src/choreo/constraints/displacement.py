@@ -41,3 +41,29 @@ def offset_anchors(at: np.ndarray, offset: np.ndarray, reach: int) -> tuple[np.n
     values = np.concatenate([offset, np.zeros(len(zeros))])
     order = np.argsort(anchors, kind="stable")
     return anchors[order], values[order]
+
+
+def displace_motion(motion, constraints, reach: int = REACH_FRAMES, root_reach: int | None = None):
+    """``motion`` bent onto ``constraints`` (a :class:`~choreo.constraints.Constraints` of its
+    length): given rotations and root axes exact, their neighbours bent smoothly towards them.
+
+    ``root_reach`` (default ``reach``) lets the root's offsets bridge longer gaps: a dance placed
+    roughly where the given root is then drifts onto it slowly instead of sliding within 0.5 s.
+    """
+    from ..motion import motion_to_vector, vector_to_motion
+    from ..motion.vector import ROOT_SLICE
+    from .mask import as_smpl
+
+    if motion.num_frames != constraints.num_frames:
+        raise ValueError(f"constraints cover {constraints.num_frames} frames, the motion {motion.num_frames}")
+    values, mask = constraints.frame_vectors()
+    vectors = motion_to_vector(as_smpl(motion, constraints.fps))
+    joints = mask.copy()
+    joints[:, ROOT_SLICE] = False
+    moved = displace_to_constraints(vectors, values, joints, reach)
+    root = np.zeros_like(mask)
+    root[:, ROOT_SLICE] = mask[:, ROOT_SLICE]
+    moved = displace_to_constraints(moved, values, root, reach if root_reach is None else root_reach)
+    bent, _ = vector_to_motion(moved, fps=constraints.fps, skeleton=motion.skeleton)
+    bent.metadata = dict(motion.metadata)
+    return bent

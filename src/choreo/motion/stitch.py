@@ -17,7 +17,11 @@ LEFT_HIP, RIGHT_HIP = 1, 2
 
 def facing_yaw(joint_positions: np.ndarray) -> np.ndarray:
     """(...,) heading about +y of every frame, from the hips (0 = facing +z)."""
-    across = joint_positions[..., LEFT_HIP, :] - joint_positions[..., RIGHT_HIP, :]
+    return heading_of(joint_positions[..., LEFT_HIP, :] - joint_positions[..., RIGHT_HIP, :])
+
+
+def heading_of(across: np.ndarray) -> np.ndarray:
+    """(...,) heading about +y of a body whose right-to-left hip vector is ``across`` (..., 3)."""
     # forward = across x up, with up = +y: (-across_z, 0, across_x)
     return np.arctan2(-across[..., 2], across[..., 0])
 
