@@ -31,6 +31,7 @@ class Finishing:
 
     beat_lock: bool = True  # motion beats re-timed onto the music's beats (given frames stay)
     foot_lock: bool = False  # planted feet's drift moved onto the root (halves PFC, doubles FID_g)
+    speed_limit: bool = True  # turns and dashes faster than real dancers' spread over neighbouring frames
 
 
 _BACKENDS: dict[tuple, "Generator"] = {}
@@ -107,4 +108,5 @@ def dance(
     request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
     motion = backend.generate(request, progress=progress)
     frames = None if fixed is None else fixed.fixed_frames()
-    return finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock)
+    return finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock,
+                  speed=finishing.speed_limit)

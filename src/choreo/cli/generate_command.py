@@ -31,6 +31,8 @@ BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
                          help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
 FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
                          help="Let planted feet carry the body instead of sliding (halves PFC, doubles FID_g: off by default).")
+SPEED_LIMIT = typer.Option(True, "--speed-limit/--no-speed-limit",
+                           help="Spread turns and dashes faster than real dancers move over the frames around them.")
 
 
 def generate(
@@ -46,7 +48,8 @@ def generate(
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
-    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    rig: Optional[str] = RIG,
 ) -> None:
     """Generate a dance for a song, or for many songs in one run.
 
@@ -96,7 +99,7 @@ def generate(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
-                        beat_lock, foot_lock, rig=rig)
+                        beat_lock, foot_lock, rig=rig, speed_limit=speed_limit)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
@@ -123,7 +126,8 @@ def inbetween(
     key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    rig: Optional[str] = RIG,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
 
@@ -153,7 +157,7 @@ def inbetween(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
-                        foot_lock=foot_lock, rig=rig)
+                        foot_lock=foot_lock, rig=rig, speed_limit=speed_limit)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -164,7 +168,8 @@ def inpaint(
     joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    rig: Optional[str] = RIG,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
 
@@ -189,7 +194,7 @@ def inpaint(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
-                        foot_lock=foot_lock, rig=rig)
+                        foot_lock=foot_lock, rig=rig, speed_limit=speed_limit)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -198,7 +203,8 @@ def trajectory(
     path: Path = typer.Option(..., help="Root path on the floor: CSV (x,z or t,x,z; optional y) or a motion file."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    rig: Optional[str] = RIG,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
 
@@ -214,7 +220,7 @@ def trajectory(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, beat_lock=beat_lock,
-                        foot_lock=foot_lock, rig=rig)
+                        foot_lock=foot_lock, rig=rig, speed_limit=speed_limit)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -234,6 +240,7 @@ class Settings:
     beat_lock: bool = True  # finishing: motion beats re-timed onto the music's beats
     foot_lock: bool = False  # finishing: planted feet's drift moved onto the root (measured: off)
     rig: str | None = None  # write .bvh/.fbx retargeted onto this rig (mixamo); None: SMPL-24
+    speed_limit: bool = True  # finishing: joints and root no faster than real dancers move
 
 
 def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None,
@@ -292,7 +299,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
         motion = dance(music, backend, style=settings.style, seed=settings.seed, options=options, constraints=constraints,
-                       finishing=Finishing(settings.beat_lock, settings.foot_lock),
+                       finishing=Finishing(settings.beat_lock, settings.foot_lock, settings.speed_limit),
                        progress=lambda fraction: update(round(fraction * 100), 100))
     seconds = time.perf_counter() - started
     meta = motion.metadata

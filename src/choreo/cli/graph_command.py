@@ -8,7 +8,8 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import BEAT_LOCK, CHECKPOINT, FOOT_LOCK, OUTPUT, RIG, SONG, Settings, dance_one, load_backend
+from .generate_command import (BEAT_LOCK, CHECKPOINT, FOOT_LOCK, OUTPUT, RIG, SONG, SPEED_LIMIT, Settings, dance_one,
+                               load_backend)
 from .progress import progress_bar, stderr_console
 
 
@@ -42,7 +43,8 @@ def graph_dance(
     seed: int = typer.Option(0, help="0: the paper's deterministic walk; any other seed: another take of the same song."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
-    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, rig: Optional[str] = RIG,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    rig: Optional[str] = RIG,
 ) -> None:
     """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
 
@@ -56,7 +58,8 @@ def graph_dance(
 
     if top_k < 1 or (warp_smoothing is not None and warp_smoothing < 0):
         raise ParameterError("--top-k must be at least 1 and --warp-smoothing at least 0")
-    settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig)
+    settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
+                        speed_limit)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
                            **({} if warp_smoothing is None else {"warp_smoothing": warp_smoothing}))
     dance_one(backend, song, output, settings)

@@ -1,22 +1,31 @@
-"""Passes every generated dance goes through after its backend: beat lock (re-timing onto the
-music's beats), then foot lock (planted feet carry the body instead of sliding)."""
+"""Passes every generated dance goes through after its backend: speed limit (no joint faster
+than real dancers move), beat lock (re-timing onto the music's beats), then foot lock (planted
+feet carry the body instead of sliding)."""
 
 import numpy as np
 
 from ..motion import Motion
 from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
 from .foot_lock import FootLockConfig, foot_lock
+from .speed_limit import SpeedLimitConfig, speed_limit
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | None = None, *,
-           beat: bool = True, foot: bool = False) -> Motion:
-    """The passes as `choreo generate` applies them by default: beat lock (and, when asked, foot
-    lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay."""
+           beat: bool = True, foot: bool = False, speed: bool = True) -> Motion:
+    """The passes as `choreo generate` applies them by default: speed limit, beat lock (and, when
+    asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
+    The speed limit goes first, so that a glitch is not taken for a motion beat, and last, since
+    re-timing speeds stretches up by as much as 1.33 x."""
+    if speed:
+        motion = speed_limit(motion, fixed)
     if beat:
         motion = beat_lock(motion, music_beat_frames, fixed).motion
     if foot:
         motion = foot_lock(motion, fixed)
+    if speed and (beat or foot):
+        motion = speed_limit(motion, fixed)
     return motion
 
 
-__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "beat_lock", "finish", "foot_lock", "lock_warp"]
+__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "SpeedLimitConfig", "beat_lock", "finish",
+           "foot_lock", "lock_warp", "speed_limit"]
