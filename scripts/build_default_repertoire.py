@@ -6,9 +6,11 @@ M2D motion may not be redistributed, so the shipped repertoire holds no M2D fram
 the bundled SGMD checkpoint dances (seed 0, default sampler) to the first three M2D train-split
 songs of that genre (the whole clip's music; tango has one), styled with that genre, and every
 8 s clip of those dances (2 s apart) is described by the
-bundled ChoreoGraph models, leaving out clips where a joint ever moves faster than 8 m/s (a limb
-flipping between two frames) or the root faster than 3 m/s (a dash no ballroom dancer makes, which
-warping can make twice as fast). Only generated motion is stored, never the songs or their features.
+bundled ChoreoGraph models. Each dance first goes through the speed limit every dance gets
+(`choreo.finishing.speed_limit`: one-frame spins and limb flips spread over their neighbours);
+clips where a joint still moves faster than real dancers' fastest 0.1 % of frames (10.39 m/s) or
+the root faster than 3 m/s (a dash no ballroom dancer makes, which warping can make twice as
+fast) are left out. Only generated motion is stored, never the songs or their features.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import argparse
 from pathlib import Path
 
 from choreo.datasets import TRAIN, load_dataset
+from choreo.finishing.speed_limit import REAL_JOINT_SPEED, speed_limit
 from choreo.generator import GenerationRequest
 from choreo.music import Music
 from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, build_repertoire_file
@@ -26,7 +29,7 @@ from choreo_sgmd.generator import SGMDGenerator
 
 REPO = Path(__file__).resolve().parents[1]
 SONGS_PER_GENRE = 3  # enough material that a walk restricted to one genre need not replay itself
-LIMITS = SpeedLimits(joint=8.0, root=3.0)  # m/s: SGMD's limb flips and dashes are left out
+LIMITS = SpeedLimits(joint=REAL_JOINT_SPEED, root=3.0)  # m/s: what the speed limit left, and dashes
 
 
 def main() -> None:
@@ -41,7 +44,7 @@ def main() -> None:
     for genre in sorted({c.genre for c in clips}):
         for clip in [c for c in clips if c.genre == genre][:SONGS_PER_GENRE]:
             music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
-            motion = sgmd.generate(GenerationRequest(music, style=genre, seed=0))
+            motion = speed_limit(sgmd.generate(GenerationRequest(music, style=genre, seed=0)))
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
     repertoire = build_repertoire_file(dances, args.out, "bundled SGMD generations (M2D train songs)", stride=60,

@@ -57,12 +57,13 @@ AREAS: dict[str, Area] = {
                    skip="not training and not cli and not checkpoints"),
     "formats": Area(("src/choreo/formats/*",),
                     ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py", "tests/test_format_edges.py",
-                     "tests/test_gltf.py", "tests/test_rigs.py", "tests/test_fbx.py", "tests/test_format_survivors.py"),
+                     "tests/test_gltf.py", "tests/test_rigs.py", "tests/test_fbx.py", "tests/test_format_survivors.py",
+                     "tests/test_gltf_fbx_survivors.py"),
                     skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
     "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/test_spectrum.py",)),
     "finishing": Area(("src/choreo/finishing/*",),
                       ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py",
-                       "tests/test_finishing_survivors.py")),
+                       "tests/test_finishing_survivors.py", "tests/test_speed_limit.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
                           ("tests/test_sgmd_sampling.py", "tests/test_sgmd_controls.py", "tests/test_sgmd.py"),
                           skip="not training and not free_text and not batch and not generate_ and not inference"
