@@ -30,7 +30,7 @@ class SpeedLimitConfig:
     joint_speed: float = REAL_JOINT_SPEED
     floor_step: float = REAL_FLOOR_STEP  # per frame at 30 fps
     reach: int = 2  # frames on each side of a step above a limit that each smoothing pass touches
-    max_passes: int = 100
+    max_passes: int = 500
 
 
 def speed_limit(motion: Motion, fixed: np.ndarray | None = None, config: SpeedLimitConfig = SpeedLimitConfig()) -> Motion:
@@ -49,14 +49,16 @@ def speed_limit(motion: Motion, fixed: np.ndarray | None = None, config: SpeedLi
         root[chosen[:, None], [0, 2]] = smoothed(root[:, [0, 2]], chosen)
     rotations = motion.rotations.copy()
     positions = motion.replace(root_positions=root).joint_positions()
+    speed = step_lengths(positions).max(-1) * motion.fps  # (T-1,), kept up to date where frames move
     for _ in range(config.max_passes):
-        too_fast = step_lengths(positions).max(-1) * motion.fps > config.joint_speed
-        chosen = frames_around(too_fast, movable, config.reach)
+        chosen = frames_around(speed > config.joint_speed, movable, config.reach)
         if not len(chosen):
             break
         rotations[chosen] = smoothed(rotations, chosen, quaternions=True)
         root[chosen] = smoothed(root, chosen)
         positions[chosen] = motion.replace(root_positions=root[chosen], rotations=rotations[chosen]).joint_positions()
+        steps = np.unique(np.concatenate([chosen - 1, chosen]))  # the steps into and out of moved frames
+        speed[steps] = np.linalg.norm(positions[steps + 1] - positions[steps], axis=-1).max(-1) * motion.fps
     return motion.replace(root_positions=root, rotations=rotations, metadata=dict(motion.metadata))
 
 
