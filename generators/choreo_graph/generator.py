@@ -68,8 +68,9 @@ class ChoreoGraphGenerator(Generator):
         guide = self.guide(request.constraints, len(mel), config)
         path = self.walk(mel, config, allowed, report, seed=request.seed or 0, guide=guide)
         motion = self.assemble(path, mel, config, guide)  # as many frames as the mel, i.e. the music
-        walk_error = None if guide is None else guide.root_error(motion)
+        walk_error = None
         if guide is not None:  # what the walk did not reach exactly, bent onto the constraints
+            walk_error = guide.root_error(motion)
             motion = displace_motion(motion, request.constraints, root_reach=len(mel))
         report(1.0)
         motion.metadata = {
