@@ -70,6 +70,8 @@ AREAS: dict[str, Area] = {
                                " and not never_trained_on"),  # reads the bundled weights, which the clone moves
     "graph": Area(("src/choreo_graph/graph.py", "src/choreo_graph/warp.py", "src/choreo_graph/tempo.py"),
                   ("tests/test_graph_units.py", "tests/test_graph_costs.py")),  # test_graph.py builds a repertoire: too slow per mutant
+    "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
+                        ("tests/test_graph_constraints.py", "tests/test_constraint_units.py")),
 }
 
 

@@ -414,6 +414,29 @@ def test_inference_checkpoint_is_small_and_generates_the_same(tiny_checkpoint, t
     np.testing.assert_array_equal(a.rotations, b.rotations)
 
 
+def test_half_precision_checkpoint_halves_the_file_and_rounds_only_the_weights(tiny_checkpoint, tmp_path):
+    import torch
+    from choreo_sgmd.checkpoint import export_for_inference
+    from choreo_sgmd.generator import SGMDGenerator
+
+    export_for_inference(tiny_checkpoint, tmp_path / "full.pt")
+    export_for_inference(tiny_checkpoint, tmp_path / "half.pt", half=True)
+    full, half = load_checkpoint(tmp_path / "full.pt"), load_checkpoint(tmp_path / "half.pt")
+    assert (tmp_path / "half.pt").stat().st_size < 0.6 * (tmp_path / "full.pt").stat().st_size
+    assert {w.dtype for w in half["ema_state_dict"].values() if w.is_floating_point()} == {torch.float16}
+    for name, weight in full["ema_state_dict"].items():  # each weight rounded to the nearest float16
+        torch.testing.assert_close(half["ema_state_dict"][name], weight.half(), rtol=0, atol=0)
+    assert all(torch.equal(half["normalizer"][k], v) for k, v in full["normalizer"].items())  # statistics untouched
+    generator = SGMDGenerator(tmp_path / "half.pt")
+    assert next(generator.model.parameters()).dtype == torch.float32  # computes in float32
+    music = Music.from_array(np.zeros(22050 * 6, np.float32) + 0.01, 22050)
+    request = GenerationRequest(music, style="rumba", seed=1, options={"steps": 2})
+    a = SGMDGenerator(tmp_path / "full.pt").generate(request)
+    b = generator.generate(request)
+    assert not np.array_equal(a.rotations, b.rotations)  # the rounding reaches the dance ...
+    np.testing.assert_allclose(a.joint_positions(), b.joint_positions(), atol=0.02)  # ... by millimetres
+
+
 def test_batch_generation_reports_bad_songs_and_goes_on(tiny_checkpoint, tmp_path, capsys):
     import json
 

@@ -66,28 +66,36 @@ def check_diffusion_config(config, where: str) -> None:
             raise InputError(f"{where}: diffusion_config {key}={value!r} is outside {low:g} to {high:g}")
 
 
-def inference_state(state: dict) -> dict:
+def inference_state(state: dict, half: bool = False) -> dict:
     """The part of a training checkpoint that generation uses: EMA weights, configs and statistics.
 
     A quarter of the size of a training checkpoint (no raw weights, no AdamW moments); it cannot be
-    resumed from, which is why ``choreo train`` keeps writing full ones.
+    resumed from, which is why ``choreo train`` keeps writing full ones. ``half`` stores the weights
+    in float16 (an eighth; the generator computes in float32 after loading): every committed
+    checkpoint stays in the repository's history, so its size is paid for good.
     """
     missing = [key for key in INFERENCE_KEYS if key not in state]
     if missing:
         raise InputError(f"checkpoint lacks {', '.join(missing)}")
-    return {key: state[key] for key in INFERENCE_KEYS}
+    inference = {key: state[key] for key in INFERENCE_KEYS}
+    if half:
+        inference["ema_state_dict"] = {name: weight.half() if weight.is_floating_point() else weight
+                                       for name, weight in inference["ema_state_dict"].items()}
+    return inference
 
 
-def export_for_inference(source: str | os.PathLike, destination: str | os.PathLike) -> dict:
-    state = inference_state(load_checkpoint(source))
+def export_for_inference(source: str | os.PathLike, destination: str | os.PathLike, half: bool = False) -> dict:
+    state = inference_state(load_checkpoint(source), half)
     save_checkpoint(state, destination)
     return state
 
 
-if __name__ == "__main__":  # python -m choreo_sgmd.checkpoint runs/sgmd-cpu/last.pt generators/choreo_sgmd/weights/x.pt
+if __name__ == "__main__":  # python -m choreo_sgmd.checkpoint runs/sgmd-cpu/last.pt generators/choreo_sgmd/weights/x.pt [--half]
     import sys
 
-    if len(sys.argv) != 3:
-        sys.exit("usage: python -m choreo_sgmd.checkpoint TRAINING_CHECKPOINT INFERENCE_CHECKPOINT")
-    exported = export_for_inference(sys.argv[1], sys.argv[2])
-    print(f"wrote {sys.argv[2]}: EMA weights after {exported['step']} steps")
+    arguments = [a for a in sys.argv[1:] if a != "--half"]
+    if len(arguments) != 2:
+        sys.exit("usage: python -m choreo_sgmd.checkpoint TRAINING_CHECKPOINT INFERENCE_CHECKPOINT [--half]")
+    exported = export_for_inference(*arguments, half="--half" in sys.argv[1:])
+    precision = "float16" if "--half" in sys.argv[1:] else "float32"
+    print(f"wrote {arguments[1]}: EMA weights after {exported['step']} steps ({precision})")
