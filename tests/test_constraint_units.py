@@ -88,6 +88,18 @@ def test_fixed_frames_are_those_with_any_joint_or_root_axis():
     assert c.fixed_frames().tolist() == [False, False, True, False, True, True]
 
 
+def test_describe_names_what_is_given_a_root_path_included():
+    assert Constraints.none(10, 30).describe() == "nothing given"
+    path = Constraints.none(10, 30).fix_root_path(np.zeros((10, 2)))
+    assert path.describe() == "the floor path on 100 % of frames given"  # no joint: not "0 % of joints"
+    assert Constraints.none(10, 30).fix_root_path(np.zeros((10, 2)), np.ones(10)).describe() == \
+        "the root on 100 % of frames given"
+    keys = Constraints.none(10, 30)
+    keys.joints_known[:2, :12] = True  # 24 of 240 joint values
+    keys.root_known[:2] = True
+    assert keys.describe() == "10 % of joint rotations and the root on 20 % of frames given"
+
+
 def test_fix_motion_copies_every_frame_joint_and_root_from_at():
     motion = numbered_motion(4)
     c = Constraints.none(10, 30)

@@ -315,7 +315,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         render_preview(motion, video, RenderConfig(), song)
         written.append(str(video))
     if written:
-        kept = f", {100 * constraints.known_fraction():.0f} % of joint values given" if constraints else ""
+        kept = f", {constraints.describe()}" if constraints else ""
         how = (f"{meta.get('sampler')} {meta.get('steps')} steps, guidance {meta.get('guidance'):g}, seed {settings.seed}"
                if meta.get("sampler") else f"K = {meta.get('top_k')}, repertoire {meta.get('repertoire')}")
         stderr_console.print(

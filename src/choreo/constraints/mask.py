@@ -95,6 +95,17 @@ class Constraints:
     def known_fraction(self) -> float:
         return float(self.joints_known.mean())
 
+    def describe(self) -> str:
+        """What is given, in words for a summary line: a root path fixes no joint, so the joint
+        share alone would read "0 %"."""
+        given = []
+        if self.joints_known.any():
+            given.append(f"{100 * self.joints_known.mean():.0f} % of joint rotations")
+        if self.root_known.any():
+            frames = self.root_known.any(axis=1).mean()
+            given.append(f"the {'floor path' if not self.root_known[:, 1].any() else 'root'} on {100 * frames:.0f} % of frames")
+        return " and ".join(given) + " given" if given else "nothing given"
+
     def target_motion(self) -> Motion:
         return Motion(self.root, self.rotations, fps=self.fps)
 
