@@ -70,6 +70,7 @@ AREAS: dict[str, Area] = {
                                " and not never_trained_on"),  # reads the bundled weights, which the clone moves
     "graph": Area(("src/choreo_graph/graph.py", "src/choreo_graph/warp.py", "src/choreo_graph/tempo.py"),
                   ("tests/test_graph_units.py", "tests/test_graph_costs.py")),  # test_graph.py builds a repertoire: too slow per mutant
+    "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/test_speed_limit.py",)),  # also in finishing; alone: minutes
     "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
                         ("tests/test_graph_constraints.py", "tests/test_constraint_units.py")),
 }
