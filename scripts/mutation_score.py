@@ -63,14 +63,14 @@ AREAS: dict[str, Area] = {
     "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/test_spectrum.py",)),
     "finishing": Area(("src/choreo/finishing/*",),
                       ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py",
-                       "tests/test_finishing_survivors.py", "tests/test_speed_limit.py")),
+                       "tests/test_finishing_survivors.py", "tests/test_speed_limit.py", "tests/test_speed_limit_units.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
                           ("tests/test_sgmd_sampling.py", "tests/test_sgmd_controls.py", "tests/test_sgmd.py"),
                           skip="not training and not free_text and not batch and not generate_ and not inference"
                                " and not never_trained_on"),  # reads the bundled weights, which the clone moves
     "graph": Area(("src/choreo_graph/graph.py", "src/choreo_graph/warp.py", "src/choreo_graph/tempo.py"),
                   ("tests/test_graph_units.py", "tests/test_graph_costs.py")),  # test_graph.py builds a repertoire: too slow per mutant
-    "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/test_speed_limit.py",)),  # also in finishing; alone: minutes
+    "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/test_speed_limit.py", "tests/test_speed_limit_units.py")),  # also in finishing; alone: minutes
     "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
                         ("tests/test_graph_constraints.py", "tests/test_constraint_units.py")),
 }
