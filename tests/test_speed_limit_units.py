@@ -126,6 +126,7 @@ def test_a_neighbour_at_right_angles_keeps_its_sign():
     q = np.array([[[0.0, 1.0, 0.0, 0.0]], [[1.0, 0.0, 0.0, 0.0]], [[1.0, 0.0, 0.0, 0.0]]])
     mean = np.array([3.0, 1.0, 0.0, 0.0])
     np.testing.assert_allclose(smoothed(q, np.array([1]), quaternions=True)[0, 0], mean / np.linalg.norm(mean))
+    np.testing.assert_allclose(smoothed(q[::-1], np.array([1]), quaternions=True)[0, 0], mean / np.linalg.norm(mean))
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -140,6 +141,27 @@ def test_the_whole_pass_equals_a_literal_one_that_recomputes_every_speed(seed, r
         assert not np.allclose(got.rotations, motion.rotations)  # there was something to do
         np.testing.assert_allclose(got.root_positions, want.root_positions, rtol=0, atol=1e-12)
         np.testing.assert_allclose(got.rotations, want.rotations, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("fixed_frames", [[], [11, 14], [24, 26]])
+def test_single_frame_runs_between_given_frames_and_a_spin_into_the_last_frame_match_the_literal_pass(fixed_frames):
+    """With reach 0 and given frames on both sides, a moved run can be one frame long; every step
+    into and out of it must be measured again."""
+    motion = jerky_dance(6, frames=30)
+    axis_angle = np.zeros((30, 24, 3))
+    axis_angle[-1, 0, 1] = 1.5  # the whole body turns into the last frame
+    turned = Motion.from_axis_angle(np.zeros((30, 3)), axis_angle, fps=30.0).rotations[:, :1]
+    rotations = motion.rotations.copy()
+    w1, v1, w2, v2 = rotations[:, 0, :1], rotations[:, 0, 1:], turned[:, 0, :1], turned[:, 0, 1:]
+    rotations[:, 0] = np.concatenate([w2 * w1 - (v2 * v1).sum(-1, keepdims=True), w2 * v1 + w1 * v2 + np.cross(v2, v1)], -1)
+    motion = motion.replace(rotations=rotations)
+    fixed = np.zeros(30, bool)
+    fixed[fixed_frames] = True
+    config = SpeedLimitConfig(reach=0)
+    got, want = speed_limit(motion, fixed, config), literal_speed_limit(motion, fixed, config)
+    assert not np.allclose(got.rotations[-2], motion.rotations[-2])
+    np.testing.assert_allclose(got.rotations, want.rotations, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.root_positions, want.root_positions, rtol=0, atol=1e-12)
 
 
 def test_first_and_last_frames_stay_even_when_the_fast_step_touches_them():
