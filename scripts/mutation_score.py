@@ -72,7 +72,7 @@ AREAS: dict[str, Area] = {
                   ("tests/test_graph_units.py", "tests/test_graph_costs.py")),  # test_graph.py builds a repertoire: too slow per mutant
     "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/test_speed_limit.py", "tests/test_speed_limit_units.py")),  # also in finishing; alone: minutes
     "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
-                        ("tests/test_graph_constraints.py", "tests/test_constraint_units.py")),
+                        ("tests/test_graph_constraints.py", "tests/test_constraint_units.py", "tests/test_graph_guide_units.py")),
 }
 
 
