@@ -119,7 +119,7 @@ def test_candidates_are_placed_where_the_walk_would_play_them(repertoire):
     motion = given_motion()
     c = Constraints.none(90, 30.0).fix_motion(motion, frames=np.arange(0, 3))
     guide = Guide(c, repertoire, GraphConfig())
-    clips, first, follows = np.array([0, 1, 2]), np.array([-1.0, 0.0, 12.4]), np.array([False, True, False])
+    clips, first, follows = np.array([0, 1, 2, 0]), np.array([-1.0, 0.0, 12.4, 250.0]), np.array([False, True, False, False])
     for current in (None, SimpleNamespace(clip=1, frames=np.array([5.0, 6.3]))):  # no placement chosen yet
         angles, offsets = guide.placements(clips, first, follows, current)
         want_angles, want_offsets = literal_placements(guide, repertoire, clips, first, follows, None)
@@ -129,7 +129,7 @@ def test_candidates_are_placed_where_the_walk_would_play_them(repertoire):
     guide.chose(2)
     assert guide.placement.angle == pytest.approx(want_angles[2])
     for frames in ([100.0, 101.3], [237.0, 238.9], [10.0, 10.1]):  # ahead 102.6; past the clip's end; rate at least 0.5
-        current = SimpleNamespace(clip=2, frames=np.array(frames))
+        current = SimpleNamespace(clip=2, frames=np.concatenate([np.linspace(frames[0] - 28, frames[0] - 1, 28), frames]))
         angles, offsets = guide.placements(clips, first, follows, current)
         want_angles, want_offsets = literal_placements(guide, repertoire, clips, first, follows, current)
         np.testing.assert_allclose(angles, want_angles, atol=1e-9)
@@ -234,3 +234,6 @@ def test_reach_one_still_bends_the_neighbours():
     np.testing.assert_allclose(displace_to_constraints(frames, values, mask, reach=2)[:, 0], [0, 0.5, 1, 0.5, 0])
     np.testing.assert_allclose(displace_to_constraints(frames, values, np.roll(mask, 1, 0) | mask, reach=1)[:, 0],
                                [0, 0, 1, 0, 0])  # frame 3 given as 0 stays 0
+    values[[1, 3]], mask[[1, 3]] = 1.0, True
+    mask[2] = False  # frames 1 and 3 given, 2 apart: reach 1 bridges the gap (an overwrite would leave frame 2 at 0)
+    np.testing.assert_allclose(displace_to_constraints(frames, values, mask, reach=1)[:, 0], [0, 1, 1, 1, 0])

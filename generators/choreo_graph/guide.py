@@ -78,7 +78,7 @@ class Guide:
             cost += self.config.path_cost * np.square(placed - self.root[rooted]).sum(-1).mean(-1)
         posed = priced(span[self.posed[span]])
         if len(posed) and self.config.key_cost:
-            played = np.rint(frames[:, posed - t * NODE_FRAMES]).astype(int)
+            played = np.clip(np.rint(frames[:, posed - t * NODE_FRAMES]).astype(int), 0, self.repertoire.poses.shape[1] - 1)
             poses = self.repertoire.poses[clips[:, None], played].astype(np.float32)  # (C, F, 24, 3)
             cost += self.config.key_cost * np.square(poses - self.poses[posed]).sum(-1).mean((-1, -2))
         return cost
