@@ -162,7 +162,7 @@ def main() -> None:
     sets = {"real test motion (the reference)": windows_as_dances(test),
             "retrieval baseline (nearest train music)": retrieval_dances(train_windows, windows)}
     if args.edge.is_file():
-        sets["SGMD without style (EDGE-equivalent ablation, 6,000 steps like the bundled model)"] = sgmd_dances(args.edge, scoring, 2.0, False)
+        sets["SGMD without style (EDGE-equivalent ablation: 6,000 steps of the earlier recipe; the bundled model has 12,000)"] = sgmd_dances(args.edge, scoring, 2.0, False)
     sets["SGMD bundled, guidance 1"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, 1.0, True)
     sets["SGMD bundled, guidance 2 (default)"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, 2.0, True)
     sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, scoring)

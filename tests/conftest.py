@@ -4,17 +4,17 @@ import numpy as np
 import pytest
 import torch
 
-from choreo.music import FEATURE_DIM, RHYTHM_DIM
+from choreo.music import FEATURE_DIM
 from choreo_sgmd.data import WindowTensors
 
 
-def synthetic_windows(count=4, frames=150, seed=0) -> WindowTensors:
+def synthetic_windows(count=4, frames=150, seed=0, music_dim=FEATURE_DIM) -> WindowTensors:
     g = torch.Generator().manual_seed(seed)
     t = torch.arange(frames) / 30.0
     motion = torch.zeros(count, frames, 151)
     motion[..., 4:7] = torch.stack([torch.sin(t), 0.9 + 0.05 * torch.sin(4 * t), torch.cos(t)], -1)
     motion[..., 7:] = torch.tensor([1.0, 0, 0, 0, 1, 0]).repeat(24) + 0.1 * torch.sin(3 * t)[:, None]
-    return WindowTensors(motion, torch.randn(count, frames, FEATURE_DIM + RHYTHM_DIM, generator=g), torch.randn(count, 8, generator=g),
+    return WindowTensors(motion, torch.randn(count, frames, music_dim, generator=g), torch.randn(count, 8, generator=g),
                          torch.ones(count, dtype=torch.bool))
 
 

@@ -71,15 +71,35 @@ def test_every_training_flag_reaches_the_checkpoint(tmp_path):
     out = tmp_path / "run"
     flags = ["--steps", "1", "--batch-size", "2", "--checkpoint-every", "1", "--prompt", "onehot", "--seed", "3",
              "--style-mode", "concat", "--style-init", "zero", "--style-dropout", "0.2", "--mirror", "--stretch", "1,1.1",
-             "--turns", "0,90", "--genre-balance", "0.25", "--no-rhythm", "--prediction", "v", "--sigma-data", "0.5",
+             "--turns", "0,90", "--genre-balance", "0.25", "--rhythm", "--prediction", "v", "--sigma-data", "0.5",
              "--snr-gamma", "5", "--reconstruction-weight", "6"]
     command = [*CHOREO, "train", "sgmd", "--data", str(FIXTURES), "--out", str(out), "--config", "tiny", *flags]
     subprocess.run(command, check=True, capture_output=True, timeout=300)
     state = load_checkpoint(out / "last.pt")
     model, diffusion, train = state["model_config"], state["diffusion_config"], state["train_config"]
-    assert (model["style_mode"], model["style_init"], model["music_dim"], model["latent_dim"]) == ("concat", "zero", 35, 32)
+    assert (model["style_mode"], model["style_init"], model["music_dim"], model["latent_dim"]) == ("concat", "zero", 38, 32)
     assert (diffusion["style_dropout"], diffusion["prediction"], diffusion["sigma_data"], diffusion["snr_gamma"],
             diffusion["reconstruction_weight"]) == (0.2, "v", 0.5, 5.0, 6.0)
     assert (train["max_steps"], train["batch_size"], train["checkpoint_every"], train["validation_every"],
             train["seed"], train["prompt_kind"], train["mirror"], list(train["stretch"]), list(train["turns"]),
             train["genre_balance"]) == (1, 2, 1, 1, 3, "onehot", True, [1.0, 1.1], [0.0, 90.0], 0.25)
+    # the rhythm channels (a 38-d music input) are fed at generation too
+    song = Path(__file__).parents[1] / "examples" / "drum_and_bass_174bpm.wav"
+    generated = subprocess.run([*CHOREO, "generate", str(song), "-o", str(tmp_path / "rhythm.npz"), "--checkpoint",
+                                str(out / "last.pt"), "--steps", "2"], capture_output=True, text=True)
+    assert generated.returncode == 0, generated.stderr
+
+
+def test_training_defaults_are_the_bundled_models_recipe():
+    """`choreo train sgmd` with no flags trains what the bundled model was trained with (docs/sgmd.md),
+    read from the bundled checkpoint itself: every setting but the run's length and logging."""
+    from choreo_sgmd import DEFAULT_CHECKPOINT
+    from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config, to_dict
+    from choreo_sgmd.style import style_dim
+
+    bundled = load_checkpoint(DEFAULT_CHECKPOINT)
+    assert to_dict(model_config("cpu", style_dim=style_dim("description"))) == bundled["model_config"]
+    assert to_dict(DiffusionConfig()) == bundled["diffusion_config"]
+    free = {"max_steps", "validation_every", "checkpoint_every"}
+    defaults = {k: v for k, v in to_dict(TrainConfig()).items() if k not in free}
+    assert defaults == {k: v for k, v in bundled["train_config"].items() if k not in free}

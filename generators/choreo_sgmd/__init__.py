@@ -19,7 +19,7 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
     from dataclasses import replace
 
     from choreo.datasets import TEST, TRAIN, WindowConfig, load_dataset
-    from choreo.music import FEATURE_DIM
+    from choreo.music import FEATURE_DIM, RHYTHM_DIM
 
     from .config import DiffusionConfig, TrainConfig, model_config
     from .data import Augmentation, windows_to_tensors
@@ -34,7 +34,7 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
         "genre_balance": options.genre_balance}))
     model = model_config(options.config, style_dim=style_dim(options.prompt), **given({
         "style_mode": options.style_mode, "style_init": options.style_init,
-        "music_dim": FEATURE_DIM if options.rhythm is False else None}))
+        "music_dim": FEATURE_DIM + RHYTHM_DIM if options.rhythm else None}))
     diffusion = DiffusionConfig(**given({"style_dropout": options.style_dropout, "prediction": options.prediction,
                                          "snr_gamma": options.snr_gamma, "sigma_data": options.sigma_data,
                                          "reconstruction_weight": options.reconstruction_weight}))

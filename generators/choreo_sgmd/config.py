@@ -16,7 +16,7 @@ PREDICTIONS = ("x0", "v")  # what the network outputs: x0 itself (EDGE), or v, t
 @dataclass(frozen=True)
 class ModelConfig:
     frame_dim: int = FRAME_DIM  # 4 contacts | 3 root | 24 x 6D
-    music_dim: int = FEATURE_DIM + RHYTHM_DIM  # 35-d librosa features + beat phase and tempo (35: without)
+    music_dim: int = FEATURE_DIM  # the 35-d features; FEATURE_DIM + RHYTHM_DIM adds beat phase and tempo (`--rhythm`)
     style_dim: int = 384  # all-MiniLM-L6-v2 sentence embeddings; the number of genres for one-hot
     latent_dim: int = 512
     ff_dim: int = 1024
@@ -58,8 +58,9 @@ class DiffusionConfig:
     snr_gamma: float = 0.0  # > 0: weigh each window's loss by min(SNR(t), snr_gamma) (min-SNR); 0: uniform
     music_dropout: float = 0.25  # classifier-free guidance: music replaced by a learned null
     style_dropout: float = 0.1  # so the model can also dance with no style given
-    # Loss weights (EDGE's defaults): x0 reconstruction, velocity, FK joint positions, foot contact.
-    reconstruction_weight: float = 0.636
+    # Loss weights: x0 reconstruction, velocity, FK joint positions, foot contact. EDGE's, except the x0
+    # term at 10 x EDGE's 0.636: the one term on every rotation, so the network reads the limbs (docs/results.md).
+    reconstruction_weight: float = 6.36
     velocity_weight: float = 2.964
     joint_weight: float = 0.646
     foot_weight: float = 10.942
@@ -90,9 +91,9 @@ class TrainConfig:
     prompt_kind: str = "description"
     num_threads: int = 0  # 0: torch's default
     mirror: bool = False  # also train on every clip's mirror image (off: ballroom is chiral, docs/sgmd.md)
-    stretch: tuple[float, ...] = (0.85, 1.0, 1.18)  # and on it danced at these paces, music along
+    stretch: tuple[float, ...] = (1.0,)  # also danced at these paces, music along (e.g. 0.85, 1, 1.18; docs/sgmd.md)
     turns: tuple[float, ...] = (0.0,)  # and facing these ways (degrees about the vertical; unmeasured, off)
-    genre_balance: float = 0.5  # draw windows with weight (windows of their genre)^-genre_balance
+    genre_balance: float = 0.0  # draw windows with weight (windows of their genre)^-genre_balance (0: uniform)
 
     def __post_init__(self):
         if self.prompt_kind not in PROMPT_KINDS:

@@ -56,7 +56,7 @@ class TrainOptions:
     stretch: tuple[float, ...] | None = None
     turns: tuple[float, ...] | None = None
     genre_balance: float | None = None
-    rhythm: bool | None = None  # False: the 35-d features only (no beat phase and tempo channels)
+    rhythm: bool | None = None  # True: beat phase and tempo channels beside the 35-d features
     prediction: str | None = None
     sigma_data: float | None = None
     snr_gamma: float | None = None

@@ -24,14 +24,14 @@ def train(
     checkpoint_every: Optional[int] = typer.Option(None, help="sgmd: steps between checkpoints and validations (default 500)."),
     seed: Optional[int] = typer.Option(None, help="Seed of initialisation, batches and noise (default 0)."),
     mirror: Optional[bool] = typer.Option(None, "--mirror/--no-mirror", help="sgmd: also train on mirrored dances (default off: mirrored M2D dances score FID_k 376)."),
-    stretch: Optional[str] = typer.Option(None, help="sgmd: paces to also train at, music stretched along (default 0.85,1,1.18; 1 = off)."),
+    stretch: Optional[str] = typer.Option(None, help="sgmd: paces to also train at, music stretched along, e.g. 0.85,1,1.18 (default 1: off)."),
     turns: Optional[str] = typer.Option(None, help="sgmd: also train on every clip turned by these angles about the vertical, e.g. 0,90,180,270 (default 0: off)."),
-    genre_balance: Optional[float] = typer.Option(None, help="sgmd: 0 draws windows uniformly, 1 draws every genre equally (default 0.5)."),
-    rhythm: Optional[bool] = typer.Option(None, "--rhythm/--no-rhythm", help="sgmd: feed beat phase and tempo to the model (default on)."),
+    genre_balance: Optional[float] = typer.Option(None, help="sgmd: 0 draws windows uniformly (default), 1 draws every genre equally."),
+    rhythm: Optional[bool] = typer.Option(None, "--rhythm/--no-rhythm", help="sgmd: feed beat phase and tempo to the model (default off, as the bundled model)."),
     prediction: Optional[str] = typer.Option(None, help="sgmd: what the network predicts, x0 (default) or v."),
     sigma_data: Optional[float] = typer.Option(None, help="sgmd with --prediction v: the data's standard deviation the skip assumes (default 1)."),
     snr_gamma: Optional[float] = typer.Option(None, help="sgmd: weigh each window's loss by min(SNR, this) (min-SNR; default 0: off)."),
-    reconstruction_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the x0 reconstruction loss (default 0.636, EDGE's)."),
+    reconstruction_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the x0 reconstruction loss (default 6.36, 10 x EDGE's 0.636)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
