@@ -9,8 +9,9 @@ songs of that genre (the whole clip's music; tango has one), styled with that ge
 bundled ChoreoGraph models. Each dance first goes through the speed limit every dance gets
 (`choreo.finishing.speed_limit`: one-frame spins and limb flips spread over their neighbours);
 clips where a joint still moves faster than real dancers' fastest 0.1 % of frames (10.39 m/s) or
-the root faster than 3 m/s (a dash no ballroom dancer makes, which warping can make twice as
-fast) are left out. Only generated motion is stored, never the songs or their features.
+the root faster than theirs (3.69 m/s, the speed limit's floor step; M2D's one tango travels
+faster than 3 m/s in 8 % of its frames, so a lower limit leaves tango out) are left out. Only
+generated motion is stored, never the songs or their features.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import argparse
 from pathlib import Path
 
 from choreo.datasets import TRAIN, load_dataset
-from choreo.finishing.speed_limit import REAL_JOINT_SPEED, speed_limit
+from choreo.finishing.speed_limit import REAL_FLOOR_STEP, REAL_JOINT_SPEED, REFERENCE_FPS, speed_limit
 from choreo.generator import GenerationRequest
 from choreo.music import Music
 from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, build_repertoire_file
@@ -29,7 +30,7 @@ from choreo_sgmd.generator import SGMDGenerator
 
 REPO = Path(__file__).resolve().parents[1]
 SONGS_PER_GENRE = 3  # enough material that a walk restricted to one genre need not replay itself
-LIMITS = SpeedLimits(joint=REAL_JOINT_SPEED, root=3.0)  # m/s: what the speed limit left, and dashes
+LIMITS = SpeedLimits(joint=REAL_JOINT_SPEED, root=REAL_FLOOR_STEP * REFERENCE_FPS)  # m/s: real dancers' fastest 0.1 %
 
 
 def main() -> None:

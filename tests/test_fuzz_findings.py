@@ -138,12 +138,10 @@ def test_npz_damaged_optional_entries_are_ignored(tmp_path):
 def repertoire_arrays():
     from choreo.skeleton import SMPL24
     from choreo_graph.config import CLIP_FRAMES
-    from choreo_graph.repertoire import FORMAT_VERSION
-
-    n = 2
+    n = 2  # format 1: every clip's frames in full (still read; format 2 pools them, tests/test_graph.py)
     rotations = np.zeros((n, CLIP_FRAMES, 24, 4), np.float16)
     rotations[..., 0] = 1
-    return {"format_version": np.array(FORMAT_VERSION), "names": np.array(["a@0", "a@120"]),
+    return {"format_version": np.array(1), "names": np.array(["a@0", "a@120"]),
             "genres": np.array(["waltz", ""]), "root_positions": np.zeros((n, CLIP_FRAMES, 3), np.float32),
             "rotations": rotations, "offsets": SMPL24.offsets.astype(np.float32),
             "poses": np.zeros((n, CLIP_FRAMES, 24, 3), np.float16), "style": np.ones((n, 32), np.float32),
@@ -175,6 +173,45 @@ def test_repertoire_arrays_that_disagree_are_refused(tmp_path, repertoire_arrays
     repertoire_arrays[key] = value
     path = tmp_path / "r.npz"
     path.write_bytes(npz_bytes(**repertoire_arrays))
+    with pytest.raises(InputError, match=words):
+        Repertoire.load(path)
+
+
+def pooled(arrays: dict) -> dict:
+    """The format 1 arrays of ``repertoire_arrays`` as format 2: clip 0 at pool frame 0, clip 1 at 120."""
+    arrays = dict(arrays, format_version=np.array(2), clip_starts=np.array([0, 120]))
+    del arrays["poses"]  # computed from the rotations on reading
+    for key in ("root_positions", "rotations"):
+        clips = arrays.pop(key)
+        arrays[f"pool_{key}"] = np.concatenate([clips[0], clips[1][120:]])
+    return arrays
+
+
+@pytest.mark.parametrize("key, value, words", [
+    (None, None, None),  # the consistent file loads
+    ("clip_starts", np.array([0, 121]), "clip_starts must be 2 whole numbers from 0 to 120"),  # past the pool's end
+    ("clip_starts", np.array([-1, 0]), "clip_starts"),  # numpy would wrap a negative index around
+    ("clip_starts", np.array([0.0, 120.0]), "clip_starts"),
+    ("clip_starts", np.array([0]), "clip_starts"),
+    ("pool_rotations", np.zeros((359, 24, 4), np.float16), "pool_rotations"),
+    ("pool_root_positions", np.zeros((360, 4), np.float32), "pool_root_positions"),
+    ("pool_root_positions", np.full((360, 3), np.nan, np.float32), "NaN"),
+    ("offsets", np.zeros((24, 2), np.float32), "offsets"),
+    ("names", np.array("one"), "empty"),
+])  # fmt: skip
+def test_pooled_repertoires_are_checked_before_clips_are_cut(tmp_path, repertoire_arrays, key, value, words):
+    from choreo_graph.repertoire import Repertoire
+
+    arrays = pooled(repertoire_arrays)
+    if key is not None:
+        arrays[key] = value
+    path = tmp_path / "r.npz"
+    path.write_bytes(npz_bytes(**arrays))
+    if words is None:
+        repertoire = Repertoire.load(path)
+        np.testing.assert_array_equal(repertoire.root_positions, repertoire_arrays["root_positions"])
+        assert repertoire.rotations.shape == (2, 240, 24, 4)
+        return
     with pytest.raises(InputError, match=words):
         Repertoire.load(path)
 

@@ -199,6 +199,39 @@ def test_generates_as_many_frames_as_the_song_without_jumps(tiny_graph):
     assert motion.metadata["generator"] == "graph" and motion.metadata["seed"] == 3
 
 
+def test_a_saved_repertoire_stores_each_frame_once_and_reads_back_every_clip(tiny_graph, tmp_path):
+    """Format 2: the 14 clips (two 20 s dances, 8 s clips 2 s apart) share their frames: the pool
+    holds each dance's 600 frames once, not 14 x 240, and every clip reads back as stored."""
+    repertoire = Repertoire.load(tiny_graph[1])
+    repertoire.save(tmp_path / "pooled.npz")
+    with np.load(tmp_path / "pooled.npz") as archive:
+        assert int(archive["format_version"]) == 2 and "rotations" not in archive.files
+        assert archive["pool_rotations"].shape == (1200, 24, 4) and archive["pool_rotations"].dtype == np.float16
+        sources, starts = repertoire.origins
+        first = {source: 600 * rank for rank, source in enumerate(np.unique(sources))}  # dances in name order
+        assert list(archive["clip_starts"]) == [first[s] + start for s, start in zip(sources, starts)]
+    again = Repertoire.load(tmp_path / "pooled.npz")
+    np.testing.assert_array_equal(again.rotations, repertoire.rotations.astype(np.float16).astype(np.float32))
+    np.testing.assert_array_equal(again.root_positions, repertoire.root_positions)
+    # poses are not stored: recomputed from the float16 rotations, they differ by float16 steps of a metre
+    np.testing.assert_allclose(again.poses.astype(np.float32), repertoire.poses.astype(np.float32), atol=4e-3)
+    for key in ("names", "genres", "style", "beat_counts", "tempo"):
+        np.testing.assert_array_equal(getattr(again, key), getattr(repertoire, key))
+
+
+def test_clips_whose_shared_frames_differ_are_stored_whole(tiny_graph, tmp_path):
+    """Two clips named as if cut from one motion but differing where they overlap (hand-made or
+    edited repertoires) keep their own frames: nothing is read back from a neighbour."""
+    repertoire = Repertoire.load(tiny_graph[1])
+    second = int(np.flatnonzero(repertoire.origins[1] == 60)[0])
+    repertoire.root_positions[second, 0] += 1.0  # its first frame, shared with the clip before it
+    repertoire.save(tmp_path / "edited.npz")
+    with np.load(tmp_path / "edited.npz") as archive:
+        assert len(archive["pool_root_positions"]) == 1200 + 180  # that clip whole: 240 frames, not 60
+    again = Repertoire.load(tmp_path / "edited.npz")
+    np.testing.assert_array_equal(again.root_positions, repertoire.root_positions)
+
+
 def test_style_restricts_the_repertoire(tiny_graph):
     generator = ChoreoGraphGenerator.from_files(*tiny_graph, config=GraphConfig(top_k=2))
     mask, genre = generator.allowed_clips("Waltz")

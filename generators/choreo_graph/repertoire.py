@@ -2,7 +2,9 @@
 
 Per clip: root positions and joint rotations (to play it), each frame's pose seen from the
 dancer (to price transitions), the style vector and motion-beat count of its middle 4 s (to
-select it) and its 8 s tempo-density (to warp it). Stored as a plain .npz (no pickles).
+select it) and its 8 s tempo-density (to warp it). Stored as a plain .npz (no pickles); since
+format 2 each frame of motion once, however many overlapping clips play it, and the poses are
+computed from the stored rotations when the file is read.
 """
 
 from __future__ import annotations
@@ -27,7 +29,9 @@ from .config import CLIP_FRAMES, FPS, WINDOW_FRAMES
 from .data import beat_count, excerpt_starts
 from .model import ChoreoGraphModel
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # written: per-frame arrays pooled, each clip an offset into the pool
+READABLE_VERSIONS = (1, 2)  # 1: every clip's frames in full (four times the frames for clips 2 s apart)
+POOLED = {"root_positions": np.float32, "rotations": np.float16}  # per-frame arrays stored in format 2, as stored
 MIDDLE = slice((CLIP_FRAMES - WINDOW_FRAMES) // 2, (CLIP_FRAMES + WINDOW_FRAMES) // 2)
 
 
@@ -74,8 +78,9 @@ class Repertoire:
         return np.ones(len(self), bool) if genre is None else self.genres == genre
 
     def save(self, path: str | Path) -> None:
-        arrays = {f.name: getattr(self, f.name) for f in fields(self)}
-        arrays["rotations"] = self.rotations.astype(np.float16)  # 0.06 degree steps: half the file
+        arrays = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in (*POOLED, "poses")}
+        pool, clip_starts = pooled_frames(self)  # rotations as float16: 0.06 degree steps, half the bytes
+        arrays.update({f"pool_{key}": array for key, array in pool.items()}, clip_starts=clip_starts)
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as handle:
                 np.savez_compressed(handle, format_version=FORMAT_VERSION, **arrays)
@@ -90,9 +95,12 @@ class Repertoire:
                 data = load_npz(path)  # sizes checked before anything is decompressed
             except MotionFormatError as error:
                 raise InputError(f"{path} is not a readable repertoire: {str(error).removeprefix(f'{path}: ')}") from None
-            if int(data["format_version"]) != FORMAT_VERSION:
-                raise InputError(f"{path} has repertoire format {int(data['format_version'])}, expected {FORMAT_VERSION}")
-            values = {f.name: data[f.name] for f in fields(cls)}
+            version = int(data["format_version"])
+            if version not in READABLE_VERSIONS:
+                raise InputError(f"{path} has repertoire format {version}, expected one of {READABLE_VERSIONS}")
+            values = {f.name: data[f.name] for f in fields(cls) if version == 1 or f.name not in (*POOLED, "poses")}
+            if version == 2:
+                values.update(unpooled_frames(data, len(values["names"]) if np.ndim(values["names"]) == 1 else 0, str(path)))
         except InputError:
             raise
         except Exception as error:
@@ -100,6 +108,62 @@ class Repertoire:
         check_arrays(values, str(path))
         values["rotations"] = values["rotations"].astype(np.float32)
         return cls(**values)
+
+
+def pooled_frames(repertoire: Repertoire) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The per-frame arrays with each frame of a source stored once, and the pool frame each clip
+    starts at. Clips of one source are taken in order of their start: a clip starting d frames
+    after the one before it (d < a clip's length) whose shared frames are equal, as stored, adds
+    only its last d frames; any other clip adds all of its own."""
+    stored = {key: getattr(repertoire, key).astype(dtype) for key, dtype in POOLED.items()}
+    ids, starts = repertoire.origins
+    pieces: dict[str, list[np.ndarray]] = {key: [] for key in POOLED}
+    clip_starts = np.zeros(len(repertoire), np.int64)
+    size, previous = 0, None
+    for clip in np.lexsort((starts, ids)):
+        step = int(starts[clip] - starts[previous]) if previous is not None and ids[clip] == ids[previous] else -1
+        continues = 0 <= step < CLIP_FRAMES and all(
+            np.array_equal(array[clip][: CLIP_FRAMES - step], array[previous][step:]) for array in stored.values())
+        new = CLIP_FRAMES if not continues else step  # frames this clip adds at the pool's end
+        clip_starts[clip] = size + new - CLIP_FRAMES
+        for key, array in stored.items():
+            pieces[key].append(array[clip][CLIP_FRAMES - new:])
+        size, previous = size + new, clip
+    return {key: np.concatenate(parts) for key, parts in pieces.items()}, clip_starts
+
+
+def unpooled_frames(data, count: int, where: str) -> dict[str, np.ndarray]:
+    """Every clip's per-frame arrays cut from a format 2 pool, after checking the pool and the
+    clip offsets (a bad offset would otherwise index past the pool or wrap around); the poses
+    from the pool's rotations, once per pooled frame."""
+    if count == 0:
+        raise InputError(f"{where}: empty repertoire (no clip names)")
+    pool = {key: data[f"pool_{key}"] for key in POOLED}
+    clip_starts = data["clip_starts"]
+    frames = len(pool["root_positions"]) if pool["root_positions"].ndim else 0
+    for key, shape in (("root_positions", (3,)), ("rotations", (24, 4))):
+        if pool[key].shape != (frames, *shape) or pool[key].dtype.kind != "f":
+            raise InputError(f"{where}: pool_{key} is {pool[key].dtype} {pool[key].shape}, expected {frames}x"
+                             f"{'x'.join(map(str, shape))} numbers (one row per pooled frame)")
+    if (clip_starts.shape != (count,) or clip_starts.dtype.kind not in "iu"
+            or (clip_starts.min() < 0 or clip_starts.max() > frames - CLIP_FRAMES)):
+        raise InputError(f"{where}: clip_starts must be {count} whole numbers from 0 to {frames - CLIP_FRAMES} "
+                         f"(where each 8 s clip starts among {frames} pooled frames)")
+    offsets = data["offsets"]
+    if offsets.shape != (24, 3) or offsets.dtype.kind != "f" or not np.isfinite(offsets).all():
+        raise InputError(f"{where}: offsets must be 24x3 finite numbers (the SMPL-24 skeleton)")
+    if not all(np.isfinite(array).all() for array in pool.values()):
+        raise InputError(f"{where}: the pooled frames hold NaN or infinite values")
+    pool["poses"] = frame_poses(pool["root_positions"], pool["rotations"], offsets)
+    index = clip_starts.astype(np.int64)[:, None] + np.arange(CLIP_FRAMES)
+    return {key: array[index] for key, array in pool.items()}
+
+
+def frame_poses(root_positions: np.ndarray, rotations: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """(T, 24, 3) float16: each frame's joints local to itself (what transitions are priced on)."""
+    motion = Motion(root_positions.astype(np.float64), rotations.astype(np.float64), fps=FPS,
+                    skeleton=SMPL24.with_offsets(offsets))
+    return frame_local_positions(motion.joint_positions()).astype(np.float16)
 
 
 # Per array: the shape after the clip axis (None: any positive size) and the dtype kinds accepted.
