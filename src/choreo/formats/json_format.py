@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 
-from ..errors import MotionFormatError
+from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion
 from ..skeleton import SMPL24, Skeleton
 
@@ -46,5 +46,7 @@ def read_json(path) -> Motion:
                                       metadata=dict(document.get("metadata") or {}))
     except MotionFormatError:
         raise
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, OverflowError) as error:
         raise MotionFormatError(f"{path}: malformed motion JSON ({type(error).__name__})") from None
+    except ParameterError as error:  # values a motion cannot have (NaN, an fps outside 1-1000)
+        raise MotionFormatError(f"{path}: {error}") from None
