@@ -3,7 +3,8 @@
     python benchmarks/bench_sgmd.py [--checkpoint PATH] [--steps 5 10 20 50] [--memory-minutes 1 10 60] [--no-quality]
 
 1. Speed: seconds and network evaluations to dance 60 s of music (the example loop tiled to
-   60 s), per number of DDIM steps, with guidance 2, against the 3 s target.
+   60 s), per number of DDIM steps, without guidance, with guidance on the music, and on music and
+   style, against the 3 s target.
 2. Memory: peak RSS of a whole `choreo generate` run (fresh process, default settings) for songs
    of 1 and 10 minutes (and an hour with --memory-minutes 1 10 60), side by side.
 3. Quality against the number of steps: the M2D test windows scored like the reference row, for
@@ -29,6 +30,9 @@ sys.path.insert(0, str(Path(__file__).parent))
 from common import REPO, TARGET_SECONDS, cli_peak_rss, song_of, write_song  # noqa: E402
 
 
+GUIDANCE_PAIRS = ((1.0, 1.0), (2.0, 1.0), (2.0, 2.0))  # (music, style): none, music only, both
+
+
 def speed(generator: SGMDGenerator, steps_list: list[int]) -> None:
     audio, rate = song_of(60.0)
     started = time.perf_counter()
@@ -36,16 +40,17 @@ def speed(generator: SGMDGenerator, steps_list: list[int]) -> None:
     analysis = time.perf_counter() - started
     print(f"\n## Speed: 60 s of music, {torch.get_num_threads()} threads (music analysis {analysis:.2f} s, "
           "not included below)\n")
-    print("| sampler | steps | guidance | network evaluations per window | seconds | x 3 s target |")
+    print("| sampler | steps | guidance (music, style) | network evaluations per window | seconds | x 3 s target |")
     print("| --- | ---: | ---: | ---: | ---: | ---: |")
     generator.generate(GenerationRequest(music, style="cha-cha", options={"steps": 2}))  # warm-up
     for steps in steps_list:
-        for guidance in (1.0, 2.0):
+        for guidance, style_guidance in GUIDANCE_PAIRS:
+            options = {"steps": steps, "guidance": guidance, "style_guidance": style_guidance}
             started = time.perf_counter()
-            motion = generator.generate(GenerationRequest(music, style="cha-cha", options={"steps": steps, "guidance": guidance}))
+            motion = generator.generate(GenerationRequest(music, style="cha-cha", options=options))
             seconds = time.perf_counter() - started
-            print(f"| DDIM | {steps} | {guidance:g} | {motion.metadata['network_evaluations']} | {seconds:.2f} | "
-                  f"{seconds / TARGET_SECONDS:.2f} |", flush=True)
+            print(f"| DDIM | {steps} | {guidance:g}, {style_guidance:g} | {motion.metadata['network_evaluations']} | "
+                  f"{seconds:.2f} | {seconds / TARGET_SECONDS:.2f} |", flush=True)
 
 
 def memory(minutes: list[float]) -> None:

@@ -5,7 +5,8 @@
 On the M2D test split (213 windows of 5 s, scored against the train split as the reference row):
 ground truth; a nearest-neighbour retrieval baseline (the train window whose music features are
 closest, its motion played as is); SGMD without style (a model trained without any style input,
-the EDGE-equivalent ablation); the bundled SGMD at guidance 1 and 2; ChoreoGraph with the bundled
+the EDGE-equivalent ablation); the bundled SGMD without guidance, with guidance on the music only,
+and with its default guidance (music and style); ChoreoGraph with the bundled
 models and a repertoire cut from the M2D train split. Style adherence: a genre classifier trained
 on real train windows, its accuracy on real test windows, then the share of each method's windows
 it recognises as the genre asked for. Beat-rate lock on songs from outside M2D whose tempo is
@@ -53,11 +54,17 @@ def retrieval_dances(train_windows, test_windows) -> list[Dance]:
     return dances
 
 
-def sgmd_dances(checkpoint: Path, scoring: ScoringSet, guidance: float, with_style: bool) -> list[Dance]:
+SGMD_GUIDANCE_ROWS = {  # label: sampling options (the rest: the defaults)
+    "SGMD bundled, no guidance": {"guidance": 1.0, "style_guidance": 1.0},
+    "SGMD bundled, guidance 2 on the music only (the default until 2026-12-04)": {"guidance": 2.0, "style_guidance": 1.0},
+    "SGMD bundled, default (guidance 2 on the music, t/T <= 0.6, and 2 on the style)": {},
+}
+
+
+def sgmd_dances(checkpoint: Path, scoring: ScoringSet, options: dict, with_style: bool) -> list[Dance]:
     from choreo import load_backend
 
-    return score_generator(load_backend("sgmd", checkpoint), scoring, with_style=with_style,
-                           options={"guidance": guidance})[1]
+    return score_generator(load_backend("sgmd", checkpoint), scoring, with_style=with_style, options=options)[1]
 
 
 def graph_dances(train_clips, scoring: ScoringSet) -> list[Dance]:
@@ -162,9 +169,9 @@ def main() -> None:
     sets = {"real test motion (the reference)": windows_as_dances(test),
             "retrieval baseline (nearest train music)": retrieval_dances(train_windows, windows)}
     if args.edge.is_file():
-        sets["SGMD without style (EDGE-equivalent ablation: 6,000 steps of the earlier recipe; the bundled model has 12,000)"] = sgmd_dances(args.edge, scoring, 2.0, False)
-    sets["SGMD bundled, guidance 1"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, 1.0, True)
-    sets["SGMD bundled, guidance 2 (default)"] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, 2.0, True)
+        sets["SGMD without style (EDGE-equivalent ablation: 6,000 steps of the earlier recipe; the bundled model has 12,000)"] = sgmd_dances(args.edge, scoring, {"guidance": 2.0}, False)
+    for label, options in SGMD_GUIDANCE_ROWS.items():
+        sets[label] = sgmd_dances(choreo_sgmd.DEFAULT_CHECKPOINT, scoring, options, True)
     sets["ChoreoGraph bundled models, M2D-train repertoire"] = graph_dances(train, scoring)
     reports = {name: score(dances, reference) for name, dances in sets.items()}
 

@@ -30,9 +30,12 @@ def main() -> None:
     parser.add_argument("--guidance", type=float, nargs="+", default=[2.0])
     parser.add_argument("--steps", type=int, nargs="+", default=[50])
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--intervals", nargs="+", default=["0:1"],
-                        help="noise-level intervals LOW:HIGH (t/T) where guidance applies, e.g. 0.3:1")
-    parser.add_argument("--style-guidance", type=float, nargs="+", default=[1.0],
+    parser.add_argument("--intervals", nargs="+", default=["auto"],
+                        help="noise-level intervals LOW:HIGH (t/T) where music guidance applies, e.g. 0.3:1 "
+                             "(auto: the sampler's default)")
+    parser.add_argument("--style-intervals", nargs="+", default=["0:1"],
+                        help="noise-level intervals LOW:HIGH (t/T) where style guidance applies")
+    parser.add_argument("--style-guidance", type=float, nargs="+", default=[2.0],
                         help="guidance weights on the style (1: none)")
     parser.add_argument("--no-style", action="store_true")
     parser.add_argument("--threads", type=int, default=0)
@@ -56,17 +59,19 @@ def main() -> None:
     for checkpoint in args.checkpoints:
         generator = load_backend("sgmd", checkpoint)
         for guidance in args.guidance:
-            for steps, interval, style_w in [(s, i, g) for s in args.steps for i in args.intervals
-                                             for g in args.style_guidance]:
+            for steps, interval, style_w, style_interval in [(s, i, g, si) for s in args.steps for i in args.intervals
+                                                             for g in args.style_guidance for si in args.style_intervals]:
                 started = time.time()
-                bounds = tuple(float(b) for b in interval.split(":"))
+                bounds = None if interval == "auto" else tuple(float(b) for b in interval.split(":"))
+                style_bounds = tuple(float(b) for b in style_interval.split(":"))
                 label = (f"{Path(checkpoint).name} step {generator.trained_steps}, w={guidance:g}, DDIM {steps}"
-                         + (f", guided on t/T {interval}" if bounds != (0.0, 1.0) else "")
+                         + (f", guided on t/T {interval}" if bounds is not None else "")
                          + (f", style w={style_w:g}" if style_w != 1.0 else "")
+                         + (f" on t/T {style_interval}" if style_w != 1.0 and style_bounds != (0.0, 1.0) else "")
                          + (", no style" if args.no_style else ""))
                 for finished in (False, True) if args.finished else (False,):
                     options = {"steps": steps, "guidance": guidance, "guidance_interval": bounds,
-                               "style_guidance": style_w}  # same noise both times
+                               "style_guidance": style_w, "style_guidance_interval": style_bounds}  # same noise both times
                     report, dances = score_generator(generator, scoring, with_style=not args.no_style, seed=args.seed,
                                                      options=options, finished=finished, foot_lock=args.foot_lock)
                     recognised = classifier.agreement([d.positions for d in dances], genres)

@@ -166,6 +166,55 @@ def test_style_guidance_adds_its_own_term_beside_music_guidance():
             assert denoiser.evaluations_at(400) == (3 if guidance != 1 else 2)
         # a window given no style has nothing to guide: its style term is zero
         torch.testing.assert_close(denoiser(x, 400)[2], conditional[2], atol=1e-5, rtol=1e-5)
+    unstyled = GuidedDenoiser(model, music, style, torch.zeros(5, dtype=torch.bool), 2.5, style_guidance=3.0)
+    assert unstyled.evaluations_at(400) == 2  # no window has a style: the style term is not evaluated at all
+
+
+def test_style_guidance_applies_only_inside_its_own_interval():
+    from choreo_sgmd.guidance import GuidedDenoiser
+    from choreo_sgmd.options import SamplingOptions
+
+    model = Denoiser(TINY).eval()
+    x, _, music, style = inputs(batch=3)
+    keep_style = torch.ones(3, dtype=torch.bool)
+    options = SamplingOptions(guidance_interval=(0.0, 0.4), style_guidance_interval=(0.5, 1.0))
+    music_steps, style_steps = options.guided_steps(1000), options.style_guided_steps(1000)
+    assert (music_steps, style_steps) == ((0, 400), (500, 999))
+    denoiser = GuidedDenoiser(model, music, style, keep_style, 2.0, chunk_windows=2, interval=music_steps,
+                              style_guidance=3.0, style_interval=style_steps)
+    with torch.no_grad():
+        for t, music_guided, style_guided in ((400, True, False), (450, False, False), (500, False, True)):
+            steps = torch.full((3,), t)
+            conditional = model(x, steps, music, style, keep_style=keep_style)
+            no_music = model(x, steps, music, style, keep_music=torch.zeros(3, dtype=torch.bool), keep_style=keep_style)
+            no_style = model(x, steps, music, style, keep_style=torch.zeros(3, dtype=torch.bool))
+            expected = (conditional + music_guided * (conditional - no_music)
+                        + style_guided * 2.0 * (conditional - no_style))
+            torch.testing.assert_close(denoiser(x, t), expected, atol=1e-5, rtol=1e-5)
+            assert denoiser.evaluations_at(t) == 1 + music_guided + style_guided
+    with pytest.raises(ValueError, match="style_guidance_interval"):
+        SamplingOptions(style_guidance_interval=(0.9, 0.2))
+
+
+def test_default_guidance_guides_the_style_and_the_music_on_the_low_noise_steps_when_styled():
+    from choreo_sgmd.options import SamplingOptions
+    from choreo_sgmd.sampling import guided_denoiser
+    from choreo_sgmd.schedule import NoiseSchedule
+
+    model = Denoiser(TINY).eval()
+    x, _, music, style = inputs(batch=2)
+    options, schedule = SamplingOptions(), NoiseSchedule()
+    assert (options.guidance, options.style_guidance, options.guidance_interval) == (2.0, 2.0, None)
+    styled = guided_denoiser(model, music, style, torch.tensor([True, False]), options, schedule)
+    assert styled.interval == (0, 599) and styled.style_interval == (0, 999)
+    assert [styled.evaluations_at(t) for t in (599, 600)] == [3, 2]  # 10 DDIM steps: 6 x 3 + 4 x 2 = 26
+    unstyled = guided_denoiser(model, music, style, torch.zeros(2, dtype=torch.bool), options, schedule)
+    assert unstyled.interval == (0, 999) and [unstyled.evaluations_at(t) for t in (599, 600)] == [2, 2]
+    plain = guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool),
+                            SamplingOptions(style_guidance=1.0), schedule)
+    assert plain.interval == (0, 999) and plain.evaluations_at(600) == 2
+    given = SamplingOptions(guidance_interval=(0.2, 1.0))
+    assert guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool), given, schedule).interval == (200, 999)
 
 
 def test_a_v_predicting_model_returns_x0_through_the_schedule():

@@ -124,7 +124,8 @@ class SGMDGenerator(Generator):
             "generator": "sgmd", "checkpoint": self.checkpoint.name, "style": request.style,
             "genre": genres[0] if len(genres) == 1 else (",".join(g or "free text" for g in genres) or None),
             "style_notice": "; ".join(notices) or None, "seed": options.seed, "steps": options.steps,
-            "guidance": options.guidance, "sampler": options.sampler, "network_evaluations": evaluations,
+            "guidance": options.guidance, "style_guidance": options.style_guidance, "sampler": options.sampler,
+            "network_evaluations": evaluations,
             "trained_steps": self.trained_steps,
             "constrained_fraction": None if request.constraints is None else round(request.constraints.known_fraction(), 4),
         }  # fmt: skip

@@ -29,20 +29,26 @@ class GuidedDenoiser:
 
     def __init__(self, model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor, guidance: float,
                  chunk_windows: int = 32, cache_windows: int = CACHE_WINDOWS,
-                 interval: tuple[int, int] | None = None, style_guidance: float = 1.0):
-        """``interval`` (first, last): the diffusion steps t, inclusive, at which music guidance
-        applies (None: all)."""
+                 interval: tuple[int, int] | None = None, style_guidance: float = 1.0,
+                 style_interval: tuple[int, int] | None = None):
+        """``interval`` / ``style_interval`` (first, last): the diffusion steps t, inclusive, at which
+        music / style guidance applies (None: all)."""
         self.model, self.music, self.styles, self.keep_style, self.guidance = model, music, styles, keep_style, guidance
-        self.interval, self.style_guidance = interval, style_guidance
-        self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if style_guidance != 1.0 else [])
+        self.interval, self.style_guidance, self.style_interval = interval, style_guidance, style_interval
+        styled = style_guidance != 1.0 and bool(keep_style.any())  # with no style anywhere its term is zero
+        self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if styled else [])
         self.chunks = [slice(i, min(i + chunk_windows, len(music))) for i in range(0, len(music), chunk_windows)]
         self.cached = {i: self.condition(part) for i, part in enumerate(self.chunks) if part.stop <= cache_windows}
 
     def guided_at(self, t: int) -> bool:
-        return self.guidance != 1.0 and (self.interval is None or self.interval[0] <= t <= self.interval[1])
+        return self.guidance != 1.0 and _inside(self.interval, t)
+
+    def style_guided_at(self, t: int) -> bool:
+        return "no style" in self.blocks and _inside(self.style_interval, t)
 
     def blocks_at(self, t: int) -> list[str]:
-        return [b for b in self.blocks if b != "no music" or self.guided_at(t)]
+        active = {"conditional": True, "no music": self.guided_at(t), "no style": self.style_guided_at(t)}
+        return [b for b in self.blocks if active[b]]
 
     def evaluations_at(self, t: int) -> int:
         """Network evaluations per window at step t: the cost unit of diffusion samplers."""
@@ -77,3 +83,7 @@ class GuidedDenoiser:
                 prediction = prediction + (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
             predictions.append(prediction)
         return torch.cat(predictions)
+
+
+def _inside(interval: tuple[int, int] | None, t: int) -> bool:
+    return interval is None or interval[0] <= t <= interval[1]

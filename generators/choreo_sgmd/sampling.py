@@ -18,7 +18,7 @@ from choreo.constraints.displacement import displace_to_constraints
 from choreo.motion.vector import ROOT_SLICE
 
 from .guidance import GuidedDenoiser
-from .options import SamplingOptions  # noqa: F401 (its home before options.py)
+from .options import SamplingOptions
 from .schedule import NoiseSchedule, make_sampler
 
 
@@ -199,8 +199,7 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
     styles, keep = window_styles(style, keep_style, starts, window, num_frames)
     known = inpainting.windows(starts, window) if inpainting is not None else None
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
-    denoiser = GuidedDenoiser(model, music_windows, styles, keep, options.guidance, options.chunk_windows,
-                              interval=options.guided_steps(schedule.timesteps), style_guidance=options.style_guidance)
+    denoiser = guided_denoiser(model, music_windows, styles, keep, options, schedule)
     evaluations = 0
     for i, t in enumerate(sampler.timesteps.tolist()):
         if known is None:
@@ -216,6 +215,17 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
     return stitch(x, num_frames), evaluations
 
 
+def guided_denoiser(model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor,
+                    options: SamplingOptions, schedule: NoiseSchedule) -> GuidedDenoiser:
+    """The options' guidance on a set of windows; the music's default interval depends on whether
+    any window has a style to guide."""
+    style_guided = options.style_guidance != 1.0 and bool(torch.as_tensor(keep_style).any())
+    return GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
+                          interval=options.guided_steps(schedule.timesteps, style_guided),
+                          style_guidance=options.style_guidance,
+                          style_interval=options.style_guided_steps(schedule.timesteps))
+
+
 @torch.no_grad()
 def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styles: torch.Tensor,
                        keep_style: torch.Tensor, frame_dim: int, options: SamplingOptions,
@@ -226,8 +236,7 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     generator = torch.Generator().manual_seed(options.seed)
     x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)
-    denoiser = GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
-                              interval=options.guided_steps(schedule.timesteps), style_guidance=options.style_guidance)
+    denoiser = guided_denoiser(model, music, styles, keep_style, options, schedule)
     for t in sampler.timesteps.tolist():
         if inpainting is None:
             x = sampler.step(denoiser(x, t), t, x, generator).prev_sample
