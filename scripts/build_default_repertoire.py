@@ -3,7 +3,7 @@
     python scripts/build_default_repertoire.py [--data ../shared/data/m2d] [--out generators/choreo_graph/weights/repertoire-sgmd.npz]
 
 M2D motion may not be redistributed, so the shipped repertoire holds no M2D frame: for each genre
-the bundled SGMD checkpoint dances (seed 0, default sampler) to the first three M2D train-split
+the bundled SGMD checkpoint dances (seed 0, guidance 2 on the music only) to the first three M2D train-split
 songs of that genre (the whole clip's music; tango has one), styled with that genre, and every
 8 s clip of those dances (2 s apart) is described by the
 bundled ChoreoGraph models. Each dance first goes through the speed limit every dance gets
@@ -30,6 +30,7 @@ from choreo_sgmd.generator import SGMDGenerator
 
 REPO = Path(__file__).resolve().parents[1]
 SONGS_PER_GENRE = 3  # enough material that a walk restricted to one genre need not replay itself
+SAMPLING = {"style_guidance": 1.0}  # the sampler the shipped file was built with (before style guidance became default)
 LIMITS = SpeedLimits(joint=REAL_JOINT_SPEED, root=REAL_FLOOR_STEP * REFERENCE_FPS)  # m/s: real dancers' fastest 0.1 %
 
 
@@ -45,7 +46,7 @@ def main() -> None:
     for genre in sorted({c.genre for c in clips}):
         for clip in [c for c in clips if c.genre == genre][:SONGS_PER_GENRE]:
             music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
-            motion = speed_limit(sgmd.generate(GenerationRequest(music, style=genre, seed=0)))
+            motion = speed_limit(sgmd.generate(GenerationRequest(music, style=genre, seed=0, options=SAMPLING)))
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
     repertoire = build_repertoire_file(dances, args.out, "bundled SGMD generations (M2D train songs)", stride=60,
