@@ -425,8 +425,9 @@ def test_generate_writes_several_formats_deterministically(tiny_checkpoint, tmp_
     args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3", "--seed", "5"]
     code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "a.bvh", "-o", tmp_path / "a.npz")
     assert code == 0, err
-    assert "wrote" in err and "waltz" in err and "3 steps" in err
+    assert "wrote" in err and "waltz" in err and "3 steps, guidance 2, style guidance 2," in err
     bvh, npz = read_motion(tmp_path / "a.bvh"), read_motion(tmp_path / "a.npz")
+    assert npz.metadata["style_guidance"] == 2.0
     assert bvh.num_frames == npz.num_frames == Music.from_file(EXAMPLE_SONG).num_frames
     assert npz.metadata["seed"] == 5 and npz.metadata["genre"] == "waltz"
     np.testing.assert_allclose(bvh.joint_positions(), npz.joint_positions(), atol=1e-4)
@@ -434,6 +435,20 @@ def test_generate_writes_several_formats_deterministically(tiny_checkpoint, tmp_
     assert code == 0, err
     for ext in ("bvh", "npz"):  # same inputs and seed: the same bytes
         assert (tmp_path / f"a.{ext}").read_bytes() == (tmp_path / f"b.{ext}").read_bytes()
+
+
+def test_style_guidance_flag_changes_the_dance_and_its_summary(tiny_checkpoint, tmp_path, capsys):
+    from choreo.formats import read_motion
+
+    args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3"]
+    code, _, err = run_cli(capsys, "generate", *args, "--style-guidance", "1", "-o", tmp_path / "plain.npz")
+    assert code == 0, err
+    assert "guidance 2, seed 0" in err and "style guidance" not in err
+    code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "guided.npz")
+    assert code == 0, err
+    plain, guided = read_motion(tmp_path / "plain.npz"), read_motion(tmp_path / "guided.npz")
+    assert plain.metadata["style_guidance"] == 1.0 and guided.metadata["style_guidance"] == 2.0
+    assert np.abs(plain.joint_positions() - guided.joint_positions()).max() > 1e-3
 
 
 @pytest.mark.parametrize("extra, message", [

@@ -277,6 +277,12 @@ def sampling_flags(generator: str, steps: int | None, guidance: float | None, sa
     return guidance, sampler
 
 
+def guidance_summary(meta: dict) -> str:
+    """'guidance 2', plus the style's weight where a style was guided."""
+    styled = meta.get("style") and meta.get("style_guidance", 1.0) != 1.0
+    return f"guidance {meta['guidance']:g}" + (f", style guidance {meta['style_guidance']:g}" if styled else "")
+
+
 def load_backend(settings: Settings, **factory_options):
     from ..pipeline import load_backend as load
 
@@ -325,7 +331,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         written.append(str(video))
     if written:
         kept = f", {constraints.describe()}" if constraints else ""
-        how = (f"{meta.get('sampler')} {meta.get('steps')} steps, guidance {meta.get('guidance'):g}, seed {settings.seed}"
+        how = (f"{meta.get('sampler')} {meta.get('steps')} steps, {guidance_summary(meta)}, seed {settings.seed}"
                if meta.get("sampler") else f"K = {meta.get('top_k')}, repertoire {meta.get('repertoire')}")
         stderr_console.print(
             f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at {motion.fps:g} fps "
