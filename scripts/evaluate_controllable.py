@@ -83,6 +83,7 @@ def main() -> None:
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--guidance", type=float, default=2.0)
+    parser.add_argument("--style-guidance", type=float, default=None, help="sgmd: guidance on the style (default: the sampler's)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--resample", type=int, default=1, help="RePaint resampling: runs of each masked step")
     parser.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
@@ -95,6 +96,9 @@ def main() -> None:
     if args.generator == "sgmd":
         options = {"steps": args.steps, "guidance": args.guidance, "resample": args.resample}
         setting = f"{generator.checkpoint.name} (step {generator.trained_steps}), DDIM {args.steps}, w = {args.guidance:g}"
+        if args.style_guidance is not None:
+            options["style_guidance"] = args.style_guidance
+            setting += f", style w = {args.style_guidance:g}"
     else:
         options = {k: v for k, v in (("path_cost", args.path_cost), ("key_cost", args.key_cost)) if v is not None}
         setting = f"graph {generator.checkpoint_name} + {generator.repertoire_name}, {options or 'default costs'}"

@@ -203,8 +203,10 @@ def test_default_guidance_guides_the_style_and_the_music_on_the_low_noise_steps_
 
     model = Denoiser(TINY).eval()
     x, _, music, style = inputs(batch=2)
-    options, schedule = SamplingOptions(), NoiseSchedule()
+    options, schedule = SamplingOptions().resolved(constrained=False), NoiseSchedule()
     assert (options.guidance, options.style_guidance, options.guidance_interval) == (2.0, 2.0, None)
+    assert SamplingOptions().resolved(constrained=True).style_guidance == 1.0  # edits keep to the given frames
+    assert SamplingOptions(style_guidance=3.0).resolved(constrained=True).style_guidance == 3.0
     styled = guided_denoiser(model, music, style, torch.tensor([True, False]), options, schedule)
     assert styled.interval == (0, 599) and styled.style_interval == (0, 999)
     assert [styled.evaluations_at(t) for t in (599, 600)] == [3, 2]  # 10 DDIM steps: 6 x 3 + 4 x 2 = 26
@@ -213,7 +215,7 @@ def test_default_guidance_guides_the_style_and_the_music_on_the_low_noise_steps_
     plain = guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool),
                             SamplingOptions(style_guidance=1.0), schedule)
     assert plain.interval == (0, 999) and plain.evaluations_at(600) == 2
-    given = SamplingOptions(guidance_interval=(0.2, 1.0))
+    given = SamplingOptions(guidance_interval=(0.2, 1.0)).resolved(constrained=False)
     assert guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool), given, schedule).interval == (200, 999)
 
 
@@ -449,6 +451,9 @@ def test_style_guidance_flag_changes_the_dance_and_its_summary(tiny_checkpoint, 
     plain, guided = read_motion(tmp_path / "plain.npz"), read_motion(tmp_path / "guided.npz")
     assert plain.metadata["style_guidance"] == 1.0 and guided.metadata["style_guidance"] == 2.0
     assert np.abs(plain.joint_positions() - guided.joint_positions()).max() > 1e-3
+    code, _, err = run_cli(capsys, "generate", *args, "--seed-motion", tmp_path / "plain.npz", "-o", tmp_path / "cont.npz")
+    assert code == 0, err  # a dance continuing given frames is not style-guided unless asked
+    assert read_motion(tmp_path / "cont.npz").metadata["style_guidance"] == 1.0 and "style guidance" not in err
 
 
 @pytest.mark.parametrize("extra, message", [

@@ -97,7 +97,8 @@ class SGMDGenerator(Generator):
 
     def sampling_options(self, request: GenerationRequest) -> SamplingOptions:
         """The request's options as SamplingOptions (its seed included), the music checked."""
-        options = parse_options("sgmd", SamplingOptions, request.options)
+        constrained = request.constraints is not None and not request.constraints.is_empty
+        options = parse_options("sgmd", SamplingOptions, request.options).resolved(constrained)
         if request.seed is not None:
             options = replace(options, seed=request.seed)
         if options.sampler == "ddpm" and request.options.get("steps") is None:

@@ -141,6 +141,7 @@ def sample_long(model, schedule: NoiseSchedule, music: torch.Tensor, style: torc
     block, each block opening with the previous block's last window as known frames (the same
     masked sampling as a seed motion), so memory stays that of one block however long the song.
     """
+    options = options.resolved(constrained=inpainting is not None)  # the user's constraints, not the blocks' joins
     num_frames = len(music)
     starts = window_starts(num_frames, window)
     blocks = block_ranges(len(starts), options.block_windows)
@@ -217,8 +218,10 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
 
 def guided_denoiser(model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor,
                     options: SamplingOptions, schedule: NoiseSchedule) -> GuidedDenoiser:
-    """The options' guidance on a set of windows; the music's default interval depends on whether
-    any window has a style to guide."""
+    """The options' guidance on a set of windows (``options`` resolved: its style guidance set); the
+    music's default interval depends on whether any window has a style to guide."""
+    if options.style_guidance is None:
+        raise ValueError("resolve the sampling options first (SamplingOptions.resolved)")
     style_guided = options.style_guidance != 1.0 and bool(torch.as_tensor(keep_style).any())
     return GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
                           interval=options.guided_steps(schedule.timesteps, style_guided),
@@ -233,6 +236,7 @@ def sample_independent(model, schedule: NoiseSchedule, music: torch.Tensor, styl
     """Normalised x0 (N, W, frame_dim) for N unrelated windows (N, W, 35): how papers score 5 s clips.
 
     ``inpainting`` holds (N, W, frame_dim) known values and mask, one per window."""
+    options = options.resolved(constrained=inpainting is not None)
     generator = torch.Generator().manual_seed(options.seed)
     x = torch.randn((*music.shape[:2], frame_dim), generator=generator)
     sampler = make_sampler(options.sampler, schedule, options.steps, options.eta)

@@ -24,7 +24,8 @@ GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
 STEPS = typer.Option(None, help="Sampling steps (default: the backend's: 10 DDIM steps for sgmd, 1000 for ddpm).")
 GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the music (default 2; 1 = none).")
 STYLE_GUIDANCE = typer.Option(None, "--style-guidance",
-                              help="sgmd: guidance weight on the --style prompt (default 2; 1 = none, a third faster).")
+                              help="sgmd: guidance weight on the --style prompt (default 2, or 1 where frames are "
+                                   "given; 1 = none, a third faster).")
 SAMPLER = typer.Option(None, help="sgmd: ddim (default; fast, any number of steps) or ddpm (the full chain).")
 SEED = typer.Option(0, help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
