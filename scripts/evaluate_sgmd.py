@@ -35,8 +35,8 @@ def main() -> None:
                              "(auto: the sampler's default)")
     parser.add_argument("--style-intervals", nargs="+", default=["0:1"],
                         help="noise-level intervals LOW:HIGH (t/T) where style guidance applies")
-    parser.add_argument("--style-guidance", type=float, nargs="+", default=[2.0],
-                        help="guidance weights on the style (1: none)")
+    parser.add_argument("--style-guidance", type=float, nargs="+", default=[None],
+                        help="guidance weights on the style (1: none; default: the sampler's)")
     parser.add_argument("--no-style", action="store_true")
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--finished", action="store_true",
@@ -66,12 +66,14 @@ def main() -> None:
                 style_bounds = tuple(float(b) for b in style_interval.split(":"))
                 label = (f"{Path(checkpoint).name} step {generator.trained_steps}, w={guidance:g}, DDIM {steps}"
                          + (f", guided on t/T {interval}" if bounds is not None else "")
-                         + (f", style w={style_w:g}" if style_w != 1.0 else "")
+                         + (f", style w={style_w:g}" if style_w not in (None, 1.0) else "")
                          + (f" on t/T {style_interval}" if style_w != 1.0 and style_bounds != (0.0, 1.0) else "")
                          + (", no style" if args.no_style else ""))
                 for finished in (False, True) if args.finished else (False,):
                     options = {"steps": steps, "guidance": guidance, "guidance_interval": bounds,
-                               "style_guidance": style_w, "style_guidance_interval": style_bounds}  # same noise both times
+                               "style_guidance_interval": style_bounds}  # same noise both times
+                    if style_w is not None:
+                        options["style_guidance"] = style_w
                     report, dances = score_generator(generator, scoring, with_style=not args.no_style, seed=args.seed,
                                                      options=options, finished=finished, foot_lock=args.foot_lock)
                     recognised = classifier.agreement([d.positions for d in dances], genres)

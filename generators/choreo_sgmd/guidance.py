@@ -35,7 +35,7 @@ class GuidedDenoiser:
         music / style guidance applies (None: all)."""
         self.model, self.music, self.styles, self.keep_style, self.guidance = model, music, styles, keep_style, guidance
         self.interval, self.style_guidance, self.style_interval = interval, style_guidance, style_interval
-        styled = style_guidance != 1.0 and bool(keep_style.any())  # with no style anywhere its term is zero
+        styled = guides_style(style_guidance, keep_style)
         self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if styled else [])
         self.chunks = [slice(i, min(i + chunk_windows, len(music))) for i in range(0, len(music), chunk_windows)]
         self.cached = {i: self.condition(part) for i, part in enumerate(self.chunks) if part.stop <= cache_windows}
@@ -83,6 +83,12 @@ class GuidedDenoiser:
                 prediction = prediction + (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
             predictions.append(prediction)
         return torch.cat(predictions)
+
+
+def guides_style(style_guidance: float, keep_style) -> bool:
+    """Whether style guidance has anything to do: a weight other than 1 and a window with a style
+    (with no style anywhere its term is zero, and its evaluation is skipped)."""
+    return style_guidance != 1.0 and bool(torch.as_tensor(keep_style).any())
 
 
 def _inside(interval: tuple[int, int] | None, t: int) -> bool:

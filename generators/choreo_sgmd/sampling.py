@@ -17,7 +17,7 @@ import torch
 from choreo.constraints.displacement import displace_to_constraints
 from choreo.motion.vector import ROOT_SLICE
 
-from .guidance import GuidedDenoiser
+from .guidance import GuidedDenoiser, guides_style
 from .options import SamplingOptions
 from .schedule import NoiseSchedule, make_sampler
 
@@ -222,9 +222,8 @@ def guided_denoiser(model, music: torch.Tensor, styles: torch.Tensor, keep_style
     music's default interval depends on whether any window has a style to guide."""
     if options.style_guidance is None:
         raise ValueError("resolve the sampling options first (SamplingOptions.resolved)")
-    style_guided = options.style_guidance != 1.0 and bool(torch.as_tensor(keep_style).any())
     return GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
-                          interval=options.guided_steps(schedule.timesteps, style_guided),
+                          interval=options.guided_steps(schedule.timesteps, guides_style(options.style_guidance, keep_style)),
                           style_guidance=options.style_guidance,
                           style_interval=options.style_guided_steps(schedule.timesteps))
 
