@@ -33,7 +33,7 @@ class SamplingOptions:
 
     def __post_init__(self):
         if self.guidance < 0 or (self.style_guidance is not None and self.style_guidance < 0) or self.steps < 1:
-            raise ValueError("guidance must be >= 0 and steps >= 1")
+            raise ValueError("guidance and style_guidance must be >= 0 and steps >= 1")
         if self.sampler not in SAMPLERS:
             raise ValueError(f"unknown sampler {self.sampler!r} (use ddim or ddpm)")
         if self.guidance_interval is not None:
