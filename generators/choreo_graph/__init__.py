@@ -88,4 +88,6 @@ plugin = GeneratorPlugin(
     options=GraphConfig,
     train_options=TrainOptions,
     constraints=True,
+    listens_to_spectrum=True,
+    reads_timbre=False,
 )

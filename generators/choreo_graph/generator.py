@@ -16,6 +16,7 @@ from choreo.generator.options import parse_options
 from choreo.motion import Motion
 from choreo.music.mel import music_log_mel
 
+from . import plugin
 from .config import NODE_FRAMES, GraphConfig
 from .graph import DynamicGraph, Node, assemble, music_windows, played_clips, select_candidates, warp_candidates
 from .guide import Guide
@@ -27,8 +28,8 @@ CHUNK_SECONDS = 32  # seconds of the song selected and warped at once (bounds me
 
 class ChoreoGraphGenerator(Generator):
     name = "graph"
-    listens_to_spectrum = True  # style and tempo encoders read the log-mel
-    reads_timbre = False  # ... and nothing else of the music (its beats go to the beat lock)
+    listens_to_spectrum = plugin.listens_to_spectrum  # style and tempo encoders read the log-mel ...
+    reads_timbre = plugin.reads_timbre  # ... and nothing else of the music (its beats go to the beat lock)
 
     def __init__(self, model: ChoreoGraphModel, repertoire: Repertoire, config: GraphConfig = GraphConfig(),
                  names: tuple[str, str] = ("", "")):

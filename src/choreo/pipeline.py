@@ -12,6 +12,7 @@ measured in docs/results.md). Writing files is the caller's business (``choreo.f
 from __future__ import annotations
 
 import os
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Union
@@ -40,23 +41,68 @@ _BACKENDS: dict[tuple, "Generator"] = {}
 def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options) -> "Generator":
     """The backend ``name`` loaded from ``checkpoint`` (default: its bundled one), kept for reuse:
     a script dancing many songs loads the weights once."""
+    return PendingBackend(name, checkpoint, **factory_options).result()
+
+
+class PendingBackend:
+    """A backend loading on a background thread while the caller analyses the song.
+
+    Importing torch and reading the weights take about a second in a fresh process, as long as
+    analysing a minute of music, and the two overlap (numpy's transforms and the audio decoder
+    release the GIL). What the backend reads of the music comes from its plugin, so the analysis
+    does not wait for the weights. An unknown backend or a missing bundled checkpoint is refused
+    at once; an error while loading is raised by :meth:`result`.
+    """
+
+    def __init__(self, name: str, checkpoint: str | os.PathLike | None = None, **factory_options):
+        self.name, self.plugin = name, _available_plugin(name)
+        if checkpoint is None:
+            checkpoint = self.plugin.default_checkpoint
+            if checkpoint is None or not Path(checkpoint).is_file():
+                from .errors import ChoreoError
+
+                raise ChoreoError(f"{name} has no bundled checkpoint; pass a checkpoint")
+        self._key = (name, str(checkpoint), tuple(sorted((k, str(v)) for k, v in factory_options.items())))
+        self._error: BaseException | None = None
+        self._thread = None
+        if self._key not in _BACKENDS:
+            self._thread = threading.Thread(target=self._load, args=(checkpoint, factory_options),
+                                            name=f"choreo: loading {name}", daemon=True)  # Ctrl-C need not wait for it
+            self._thread.start()
+
+    @property
+    def listens_to_spectrum(self) -> bool:
+        return self.plugin.listens_to_spectrum
+
+    @property
+    def reads_timbre(self) -> bool:
+        return self.plugin.reads_timbre
+
+    def _load(self, checkpoint, factory_options: dict) -> None:
+        try:
+            _BACKENDS[self._key] = self.plugin.factory(checkpoint, **factory_options)
+        except BaseException as error:  # noqa: BLE001 - handed to the caller's thread by result()
+            self._error = error
+
+    def result(self) -> "Generator":
+        """The loaded backend, once it is (the loading thread's error, if it failed)."""
+        if self._thread is not None:
+            self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return _BACKENDS[self._key]
+
+
+def _available_plugin(name: str):
     from .errors import ChoreoError, ParameterError
     from .generator import available_plugins
 
-    key = (name, None if checkpoint is None else str(checkpoint), tuple(sorted((k, str(v)) for k, v in factory_options.items())))
-    if key in _BACKENDS:
-        return _BACKENDS[key]
     plugin = available_plugins().get(name)
     if plugin is None:
         raise ParameterError(f"generator {name!r} is not available (see choreo generators)")
     if plugin.factory is None:
         raise ChoreoError(f"generator {name!r} is not available: {plugin.status or 'it cannot generate'}")
-    if checkpoint is None:
-        checkpoint = plugin.default_checkpoint
-        if checkpoint is None or not Path(checkpoint).is_file():
-            raise ChoreoError(f"{name} has no bundled checkpoint; pass a checkpoint")
-    _BACKENDS[key] = plugin.factory(checkpoint, **factory_options)
-    return _BACKENDS[key]
+    return plugin
 
 
 def check_request(backend: str, options: dict[str, Any], constrained: bool) -> None:
@@ -77,7 +123,7 @@ def check_request(backend: str, options: dict[str, Any], constrained: bool) -> N
 
 def dance(
     song: Union[str, os.PathLike, "Music"],
-    generator: Union[str, "Generator"] = "sgmd",
+    generator: Union[str, "Generator", PendingBackend] = "sgmd",
     *,
     style: str | None = None,
     seed: int = 0,
@@ -90,8 +136,9 @@ def dance(
 ) -> "Motion":
     """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
 
-    ``generator`` is a backend name (see `choreo generators`) or a loaded backend; ``options``
-    are that backend's own (sgmd: steps, guidance, sampler; graph: top_k, ...); ``constraints``
+    ``generator`` is a backend name (see `choreo generators`; it loads while the song is analysed),
+    a :class:`PendingBackend` or a loaded backend; ``options`` are that backend's own (sgmd:
+    steps, guidance, sampler; graph: top_k, ...); ``constraints``
     (or a function building them from the analysed music) fix frames, joints or a root path.
     ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps.
     """
@@ -99,11 +146,14 @@ def dance(
     from .generator import GenerationRequest
     from .music import Music
 
-    backend = load_backend(generator, checkpoint) if isinstance(generator, str) else generator
-    check_request(backend.name, options or {}, constraints is not None)  # before the song is analysed
+    check_request(generator if isinstance(generator, str) else generator.name, options or {},
+                  constraints is not None)  # before any work
+    backend = PendingBackend(generator, checkpoint) if isinstance(generator, str) else generator
     music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress,
                                                                   log_mel=backend.listens_to_spectrum,
                                                                   timbre=backend.reads_timbre)
+    if isinstance(backend, PendingBackend):
+        backend = backend.result()
     fixed = constraints(music) if callable(constraints) else constraints
     request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
     motion = backend.generate(request, progress=progress)

@@ -285,9 +285,10 @@ def guidance_summary(meta: dict) -> str:
 
 
 def load_backend(settings: Settings, **factory_options):
-    from ..pipeline import load_backend as load
+    """The backend, loading in the background while the first song is analysed (PendingBackend)."""
+    from ..pipeline import PendingBackend
 
-    return load(settings.generator, settings.checkpoint, **factory_options)
+    return PendingBackend(settings.generator, settings.checkpoint, **factory_options)
 
 
 def dance_one(backend, song: Path, output: list[str], settings: Settings, build_constraints: Callable | None = None) -> dict:
