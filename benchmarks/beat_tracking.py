@@ -28,7 +28,7 @@ import librosa
 import mir_eval
 import numpy as np
 
-from choreo.music import SAMPLE_RATE, Music, load_audio
+from choreo.music import Music, load_audio
 
 sys.path.insert(0, str(Path(__file__).parent))
 from outside_songs import outside_songs  # noqa: E402
@@ -121,7 +121,7 @@ def main() -> None:
     rows = run(json.loads(args.external.read_text()) if args.external else {})
     if not rows:
         raise SystemExit("no LMMS songs: apt-get install lmms, then run benchmarks/outside_songs.py")
-    print(f"\n| tracker | Acc1 | Acc2 | beat F (70 ms) | seconds per song |\n| --- | ---: | ---: | ---: | ---: |")
+    print("\n| tracker | Acc1 | Acc2 | beat F (70 ms) | seconds per song |\n| --- | ---: | ---: | ---: | ---: |")
     for name, values in rows.items():
         acc1, acc2 = sum(r[3] for r in values), sum(r[4] for r in values)
         f = np.mean([r[5] for r in values])

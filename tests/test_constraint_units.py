@@ -13,7 +13,7 @@ from choreo.constraints import (ALL_JOINTS, JOINT_SETS, Constraints, as_smpl, pa
 from choreo.constraints import parse as parse_module
 from choreo.constraints.displacement import REACH_FRAMES, displace_motion, displace_to_constraints, offset_anchors
 from choreo.constraints.mask import check_joints
-from choreo.errors import ChoreoError, InputError, ParameterError
+from choreo.errors import InputError, ParameterError
 from choreo.formats import write_motion
 from choreo.motion import Motion
 from choreo.skeleton import Skeleton

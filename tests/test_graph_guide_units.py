@@ -11,7 +11,7 @@ import pytest
 from choreo.constraints import Constraints
 from choreo.constraints.displacement import displace_motion, displace_to_constraints
 from choreo.motion import Motion
-from choreo.motion.stitch import facing_yaw, frame_local_positions, rotate_about_y
+from choreo.motion.stitch import facing_yaw, frame_local_positions
 from choreo.skeleton import SMPL24
 from choreo_graph.config import NODE_FRAMES, GraphConfig
 from choreo_graph.guide import Guide

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, replace
 
 from choreo.motion import FRAME_DIM
-from choreo.music import FEATURE_DIM, RHYTHM_DIM
+from choreo.music import FEATURE_DIM
 
 STYLE_MODES = ("modulation", "concat", "none")  # paper's Style Modulation, its concat ablation, EDGE
 STYLE_INITS = ("random", "zero")  # the style projection's initial weights (zero: the style branch starts as the identity)
