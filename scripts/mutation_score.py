@@ -73,7 +73,8 @@ AREAS: dict[str, Area] = {
     "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/test_speed_limit.py", "tests/test_speed_limit_units.py")),  # also in finishing; alone: minutes
     "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
                         ("tests/test_graph_constraints.py", "tests/test_constraint_units.py", "tests/test_graph_guide_units.py")),
-    "beats": Area(("src/choreo/music/beats.py", "src/choreo/music/rhythm.py"), ("tests/test_beats.py", "tests/test_music.py")),
+    "beats": Area(("src/choreo/music/beats.py", "src/choreo/music/rhythm.py"),
+                  ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py")),
 }
 
 
