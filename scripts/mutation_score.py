@@ -74,7 +74,11 @@ AREAS: dict[str, Area] = {
     "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
                         ("tests/test_graph_constraints.py", "tests/test_constraint_units.py", "tests/test_graph_guide_units.py")),
     "beats": Area(("src/choreo/music/beats.py", "src/choreo/music/rhythm.py"),
-                  ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py")),
+                  ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py",
+                   "tests/test_beats_survivors.py")),
+    "skeleton": Area(("src/choreo/skeleton/*",),
+                     ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py"),
+                     skip="not training and not cli and not checkpoints"),
 }
 
 

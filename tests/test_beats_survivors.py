@@ -1,0 +1,162 @@
+"""What the beat tracker's mutation run (scripts/mutation_score.py beats) found untested: the
+peak picker's windows, ties and spacing, the onset-peak normalisation, the half-beat move of the
+grid when the percussion sits between the beats, and the rhythm channels' edges (irregular grids,
+shapes, bounds, half-marked frames)."""
+
+import numpy as np
+import pytest
+
+from choreo.errors import ParameterError
+from choreo.music import BEAT_COLUMN, FEATURE_DIM, PEAK_COLUMN, beat_phase, rhythm_channels, stretch_features
+from choreo.music.beats import ENVELOPE_LATENCY, estimate_beats, onset_peaks, pick_peaks, track_beats
+
+FPS = 96.0
+
+
+def peaks_by_definition(x, pre_max, post_max, pre_avg, post_avg, delta, wait):
+    """librosa.util.peak_pick's rule, one frame at a time: n is a peak when x[n] is the maximum of
+    x[n - pre_max : n + post_max] and at least delta above the mean of x[n - pre_avg : n + post_avg]
+    (windows cut at the ends; frame 0 looks only forwards), and more than ``wait`` frames follow
+    the previous peak."""
+    peaks, last = [], -np.inf
+    for n in range(len(x)):
+        if n == 0:
+            biggest, mean = x[:post_max].max(), x[:post_avg].mean()
+        else:
+            biggest = x[max(n - pre_max, 0):n + post_max].max()
+            mean = x[max(n - pre_avg, 0):n + post_avg].mean()
+        if x[n] == biggest and x[n] >= mean + delta and n > last + wait:
+            peaks.append(n)
+            last = n
+    return peaks
+
+
+@pytest.mark.parametrize("pre_max, post_max, pre_avg, post_avg, delta, wait",
+                         [(1, 1, 3, 4, 0.0, 0), (3, 1, 2, 2, 0.1, 2), (1, 3, 5, 1, 0.05, 1), (2, 2, 1, 6, 0.0, 4)])
+def test_pick_peaks_follows_the_definition_on_coarse_values_with_ties(pre_max, post_max, pre_avg, post_avg, delta, wait):
+    rng = np.random.default_rng(pre_max * 10 + wait)
+    for _ in range(40):
+        x = rng.integers(0, 4, size=int(rng.integers(1, 30))) / 4.0  # quarters: ties everywhere
+        found = pick_peaks(x, pre_max, post_max, pre_avg, post_avg, delta, wait)
+        assert found.dtype.kind == "i"
+        assert found.tolist() == peaks_by_definition(x, pre_max, post_max, pre_avg, post_avg, delta, wait)
+
+
+def test_pick_peaks_by_hand():
+    x = np.array([0.0, 1.0, 0.0, 0.9, 0.0, 0.0, 0.8, 0.0])
+    assert pick_peaks(x, 1, 2, 1, 2, 0.0, 0).tolist() == [1, 3, 6]
+    assert pick_peaks(x, 1, 2, 1, 2, 0.0, 1).tolist() == [1, 3, 6]  # two frames apart is more than one
+    assert pick_peaks(x, 1, 2, 1, 2, 0.0, 2).tolist() == [1, 6]  # 3 is only two after 1
+    assert pick_peaks(x, 3, 1, 1, 2, 0.0, 0).tolist() == [1]  # 1.0 is two frames before 0.9, 0.9 three before 0.8
+    assert pick_peaks(np.array([0.5, 0.5]), 1, 1, 1, 1, 0.0, 0).tolist() == [0, 1]  # equal to the mean is enough
+    assert pick_peaks(np.zeros(0), 1, 1, 1, 1, 0.0, 0).tolist() == []
+
+
+def test_onset_peaks_ignore_offset_and_scale_and_take_integer_envelopes():
+    envelope = np.zeros(200)
+    envelope[[20, 50, 90, 140]] = [3.0, 1.0, 2.0, 4.0]
+    peaks = onset_peaks(envelope, 30.0)
+    assert peaks.tolist() == [20, 50, 90, 140]
+    assert onset_peaks(envelope + 7.0, 30.0).tolist() == peaks.tolist()
+    assert onset_peaks(5.0 * envelope, 30.0).tolist() == peaks.tolist()
+    assert onset_peaks(envelope.astype(int), 30.0).tolist() == peaks.tolist()
+
+
+def test_onset_peaks_of_a_flat_or_broken_envelope_are_none():
+    for envelope in (np.zeros(50), np.r_[np.ones(10), np.nan, np.ones(10)], np.r_[np.ones(5), np.inf]):
+        peaks = onset_peaks(envelope, 30.0)
+        assert peaks.shape == (0,) and peaks.dtype.kind == "i"
+
+
+def impulses(length: int, frames) -> np.ndarray:
+    envelope = np.zeros(length)
+    envelope[list(frames)] = 1.0
+    return envelope
+
+
+def test_the_grid_moves_half_a_beat_when_the_percussion_sits_between_the_beats():
+    full = impulses(947, range(10, 947, 48))  # 120 bpm at 96 fps
+    tempo, on_beats = estimate_beats(np.stack([full, full]), FPS)
+    frames = track_beats(full, FPS, tempo)
+    assert tempo == 120.0 and frames.tolist() == list(range(10, 923, 48))
+    np.testing.assert_allclose(on_beats, (frames - ENVELOPE_LATENCY) / FPS)
+    between = impulses(947, range(34, 947, 48))
+    tempo, moved = estimate_beats(np.stack([full, between]), FPS)
+    # frames + 24, the last (946) dropped: a move may not reach the envelope's last frame
+    np.testing.assert_allclose(moved, (np.arange(34, 946, 48) - ENVELOPE_LATENCY) / FPS)
+    tempo, kept = estimate_beats(np.stack([full, np.ones(947)]), FPS)  # as strong between as on: no move
+    np.testing.assert_allclose(kept, on_beats)
+
+
+def test_two_beats_are_enough_to_move_the_grid():
+    full = impulses(130, [20, 68])
+    _, on_beats = estimate_beats(np.stack([full, full]), FPS)
+    _, moved = estimate_beats(np.stack([full, impulses(130, [44, 92])]), FPS)
+    np.testing.assert_allclose(on_beats * FPS, [19, 67])
+    np.testing.assert_allclose(moved * FPS, [43, 91])
+
+
+def test_a_beat_on_the_first_frames_is_at_time_zero():
+    full = impulses(300, range(1, 300, 48))
+    _, beats = estimate_beats(np.stack([full, full]), FPS)
+    assert beats[0] == 0.0 and beats[1] == pytest.approx(48 / FPS)
+
+
+def test_no_tempo_means_no_beats():
+    for envelope in (np.zeros(500), np.ones(500)):  # silence; a constant hum has no rises
+        tempo, beats = estimate_beats(np.stack([envelope, envelope]), FPS)
+        assert tempo == 0.0 and beats.shape == (0,)
+
+
+# -- rhythm.py --------------------------------------------------------------------------------------
+
+def test_two_beats_give_a_phase():
+    phase = beat_phase(np.array([10, 20]), 30)
+    assert phase is not None and phase[15] == pytest.approx(0.5) and phase[25] == pytest.approx(0.5)
+
+
+def test_an_irregular_grid_is_interpolated_inside_and_continued_outside_from_the_first_beat():
+    beats = np.array([13, 20, 30, 40])  # gaps 7, 10, 10: median period 10
+    phase = beat_phase(beats, 50)
+    assert phase[16] == pytest.approx(3 / 7)  # between the first two beats: linear, not the median grid
+    assert phase[40] == pytest.approx(0.0)  # on the last beat
+    assert phase[13] == pytest.approx(0.0)
+    assert phase[5] == pytest.approx(0.2)  # (5 - 13) / 10, counted from the first beat
+    assert phase[45] == pytest.approx(0.2)  # (45 - 13) / 10
+
+
+def test_rhythm_channels_refuse_other_shapes_with_the_expected_one():
+    with pytest.raises(ParameterError, match=rf"music features must have shape \(T, {FEATURE_DIM}\), got \(10, 34\)"):
+        rhythm_channels(np.zeros((10, FEATURE_DIM - 1)))
+    with pytest.raises(ParameterError, match="must have shape"):
+        rhythm_channels(np.zeros(FEATURE_DIM))
+
+
+def test_rhythm_channels_are_float32_and_a_half_marked_frame_is_no_beat():
+    features = np.zeros((60, FEATURE_DIM))
+    features[[0, 15, 30, 45], BEAT_COLUMN] = 1.0
+    features[[7, 22], BEAT_COLUMN] = 0.5  # not above one half: no beat, still 120 bpm
+    channels = rhythm_channels(features)
+    assert channels.dtype == np.float32
+    assert channels[0, 2] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_stretched_features_are_float32_with_unit_spikes_inside_the_song():
+    features = np.zeros((100, FEATURE_DIM))  # float64 in
+    features[[0, 40, 99], BEAT_COLUMN] = 1.0  # 99 / 1.6 = 61.9: rounds to 62, past the last frame (61)
+    features[[10], PEAK_COLUMN] = 0.5  # not a spike
+    fast = stretch_features(features, 1.6)
+    assert fast.dtype == np.float32 and len(fast) == 62
+    assert np.flatnonzero(fast[:, BEAT_COLUMN]).tolist() == [0, 25]
+    assert set(fast[:, BEAT_COLUMN].tolist()) == {0.0, 1.0} and not fast[:, PEAK_COLUMN].any()
+
+
+@pytest.mark.parametrize("factor", [0.25, 4.0])
+def test_stretch_factors_at_the_bounds_are_taken(factor):
+    assert len(stretch_features(np.zeros((9, FEATURE_DIM)), factor)) == int(np.floor(8 / factor)) + 1
+
+
+@pytest.mark.parametrize("factor", [0.2499, 4.001, 5.0])
+def test_stretch_factors_outside_the_bounds_are_refused(factor):
+    with pytest.raises(ParameterError, match=rf"stretch factor must be within \[0.25, 4\], got {factor}"):
+        stretch_features(np.zeros((9, FEATURE_DIM)), factor)
