@@ -77,7 +77,8 @@ AREAS: dict[str, Area] = {
                   ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py",
                    "tests/test_beats_survivors.py")),
     "skeleton": Area(("src/choreo/skeleton/*",),
-                     ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py"),
+                     ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py",
+                      "tests/test_skeleton_survivors.py"),
                      skip="not training and not cli and not checkpoints"),
 }
 

@@ -160,3 +160,133 @@ def test_stretch_factors_at_the_bounds_are_taken(factor):
 def test_stretch_factors_outside_the_bounds_are_refused(factor):
     with pytest.raises(ParameterError, match=rf"stretch factor must be within \[0.25, 4\], got {factor}"):
         stretch_features(np.zeros((9, FEATURE_DIM)), factor)
+
+
+# -- the beat tracker's dynamic programme against librosa's, on inputs with ties and edges ----------
+
+def awkward_envelopes(count: int):
+    """Coarse values (ties everywhere), a few equal spikes, long silent lead-ins and silent tails,
+    over lengths from shorter than the tracker's window to thousands of frames. (A flat envelope
+    with a single bump is left out: every path scores the same up to float rounding, and the two
+    programmes break those ties differently.)"""
+    rng = np.random.default_rng(11)
+    made = 0
+    while made < count:
+        frames = int(rng.choice([20, 60, 97, 150, 400, 1200]))
+        bpm = float(rng.choice([60.0, 87.5, 120.0, 143.0, 200.0]))
+        kind = made % 4
+        if kind == 0:
+            envelope = rng.integers(0, 3, frames).astype(float)
+        elif kind == 1:
+            envelope = np.zeros(frames)
+            envelope[rng.integers(0, frames, 5)] = 1.0
+        elif kind == 2:
+            envelope = np.maximum(rng.normal(size=frames), 0.0)
+            envelope[: frames // 3] = 0.0
+        else:
+            envelope = np.abs(rng.normal(size=frames)) ** 3
+            envelope[-frames // 2:] = 0.0
+        if envelope.any():
+            made += 1
+            yield envelope, bpm
+
+
+def test_track_beats_equals_librosa_on_awkward_envelopes():
+    librosa = pytest.importorskip("librosa")
+    for envelope, bpm in awkward_envelopes(80):
+        _, expected = librosa.beat.beat_track(onset_envelope=envelope, sr=FPS * 160, hop_length=160, bpm=bpm,
+                                              tightness=1600.0, units="frames")
+        found = track_beats(envelope, FPS, bpm, tightness=1600.0)
+        assert found.dtype.kind == "i"
+        np.testing.assert_array_equal(found, expected, err_msg=f"{len(envelope)} frames at {bpm} bpm")
+
+
+def test_track_beats_needs_two_frames_something_to_hear_and_a_tempo():
+    assert track_beats(np.array([0.0, 1.0]), FPS, 120.0).dtype.kind == "i"
+    for envelope, bpm in ((np.ones(1), 120.0), (np.zeros(300), 120.0), (np.ones(300), 0.0), (np.ones(300), -5.0)):
+        beats = track_beats(envelope, FPS, bpm)
+        assert beats.shape == (0,) and beats.dtype.kind == "i"
+
+
+# -- tempo: the autocorrelation, the metrical salience, the two priors --------------------------------
+
+def test_envelope_autocorrelation_by_definition():
+    from scipy.ndimage import uniform_filter1d
+
+    from choreo.music.beats import envelope_autocorrelation
+
+    envelope = np.random.default_rng(3).gamma(0.7, size=500)
+    rises = np.maximum(envelope - uniform_filter1d(envelope, 96), 0.0)
+    lags = np.arange(500)  # a short envelope: every lag up to its length - 1
+    expected = np.array([(rises[: 500 - k] * rises[k:]).sum() / (500 - k) for k in lags])
+    found = envelope_autocorrelation(envelope, FPS)
+    assert found.shape == (500,)
+    np.testing.assert_allclose(found, expected / expected[0], rtol=1e-9, atol=1e-12)
+    assert envelope_autocorrelation(np.random.default_rng(4).random(5000), FPS).shape == (12 * 96 + 1,)
+    flat = envelope_autocorrelation(np.ones(300), FPS)  # no rises at all
+    assert not flat.any() and np.isfinite(flat).all()
+
+
+def test_metrical_salience_by_definition():
+    from choreo.music.beats import metrical_salience
+
+    correlation = np.random.default_rng(5).random(400)  # shorter than six periods of slow tempi: those read 0
+    bpms, salience = metrical_salience(correlation, FPS)
+    assert bpms[0] == 50.0 and bpms[-1] == 260.0 and len(bpms) == 841  # 50 to 260 bpm in quarters, both ends
+    lags = np.arange(400)
+
+    def at(multiple, bpm):
+        return np.interp(multiple * 60.0 * FPS / bpm, lags, correlation, right=0.0)
+
+    expected = [at(1, b) + max(at(2, b) + at(4, b), at(3, b) + at(6, b)) for b in bpms]
+    np.testing.assert_allclose(salience, expected, rtol=1e-12)
+
+
+def test_the_tempo_priors_are_gaussians_in_octaves_around_120_bpm():
+    from choreo.music.beats import _log_prior
+
+    np.testing.assert_allclose(_log_prior(np.array([120.0, 240.0, 60.0, 170.0]), 0.7),
+                               np.exp(-0.5 * (np.log2([1.0, 2.0, 0.5, 170 / 120]) / 0.7) ** 2), rtol=1e-12)
+
+
+def designed_tempo(monkeypatch, peaks: dict) -> float:
+    """estimate_tempo when the metrical salience is zero except at ``peaks`` {bpm: salience}."""
+    import choreo.music.beats as beats
+
+    def salience(correlation, fps):
+        bpms = np.arange(50.0, 260.125, 0.25)
+        values = np.zeros(len(bpms))
+        for bpm, value in peaks.items():
+            values[np.argmin(np.abs(bpms - bpm))] = value
+        return bpms, values
+
+    monkeypatch.setattr(beats, "metrical_salience", salience)
+    return beats.estimate_tempo(np.random.default_rng(0).random(2000), FPS)
+
+
+def test_the_octave_can_halve_the_metrical_family(monkeypatch):
+    # family (weak prior): 200 (1.0 x 0.886) over 100 (0.8 x 0.985); octave (strong prior): 100 wins
+    assert designed_tempo(monkeypatch, {100.0: 0.8, 200.0: 1.0}) == 100.0
+
+
+def test_the_octave_can_double_the_metrical_family(monkeypatch):
+    # family: 55 (5.0 x 0.754) over 110 (2.0 x 0.997); octave: 110 (2.0 x 0.984) over 55 (5.0 x 0.274)
+    assert designed_tempo(monkeypatch, {55.0: 5.0, 110.0: 2.0}) == 110.0
+
+
+def test_the_octave_takes_the_salience_peak_within_one_bpm(monkeypatch):
+    # half of the family (200) is 100: the peak at 101 is within 1 bpm of it, the one at 101.75 is not
+    assert designed_tempo(monkeypatch, {101.0: 0.8, 101.75: 0.85, 200.0: 1.0}) == 101.0
+
+
+def test_the_beat_envelope_listens_below_7_khz():
+    from choreo.music.beats import onset_envelopes
+
+    sr = 15360
+    t = np.arange(4 * sr) / sr
+    gate = np.zeros_like(t)
+    window = np.hanning(int(0.08 * sr))  # smooth bursts: no broadband clicks at their edges
+    for start in np.arange(0.25, 3.8, 0.5):
+        gate[int(start * sr): int(start * sr) + len(window)] = window
+    high, low = (onset_envelopes((np.sin(2 * np.pi * f * t) * gate).astype(np.float32), sr)[0].max() for f in (7400, 1000))
+    assert low > 20 * high  # measured: 22.5 against 0.57 (with the mel bands up to 7.68 kHz: 2.7)
