@@ -76,6 +76,8 @@ AREAS: dict[str, Area] = {
     "beats": Area(("src/choreo/music/beats.py", "src/choreo/music/rhythm.py"),
                   ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py",
                    "tests/test_beats_survivors.py")),
+    "music-features": Area(("src/choreo/music/chroma.py", "src/choreo/music/features.py", "src/choreo/music/music.py"),
+                           ("tests/test_chroma.py", "tests/test_music.py", "tests/test_spectrum.py")),
     "skeleton": Area(("src/choreo/skeleton/*",),
                      ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py",
                       "tests/test_skeleton_survivors.py"),
