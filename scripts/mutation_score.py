@@ -36,6 +36,9 @@ class Area:
     files: tuple[str, ...]  # globs of the files mutated, as they lie under src/ in the clone
     tests: tuple[str, ...]  # the test files that guard them
     skip: str = ""  # a pytest -k expression leaving out tests too slow to run once per mutant
+    # modules whose functools caches are emptied before every test: mutmut forks each mutant's run from
+    # a process whose caches its own test runs filled, so a cached result would hide the mutated code
+    clear_caches: tuple[str, ...] = ()
 
 # mutmut 3 imports mutated code from mutants/src only: the backend packages are moved there (in the
 # clone), where they shadow the installed ones (which point at the live checkout).
@@ -77,7 +80,8 @@ AREAS: dict[str, Area] = {
                   ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py",
                    "tests/test_beats_survivors.py")),
     "music-features": Area(("src/choreo/music/chroma.py", "src/choreo/music/features.py", "src/choreo/music/music.py"),
-                           ("tests/test_chroma.py", "tests/test_music.py", "tests/test_spectrum.py")),
+                           ("tests/test_chroma.py", "tests/test_music.py", "tests/test_spectrum.py"),
+                           clear_caches=("choreo.music.chroma",)),  # the constant-Q filter bank is cached
     "skeleton": Area(("src/choreo/skeleton/*",),
                      ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py",
                       "tests/test_skeleton_survivors.py"),
@@ -98,6 +102,22 @@ def configure(clone: Path, area: Area) -> None:
         f.write(f"pytest_add_cli_args_test_selection = {quoted(area.tests)}\n")
         selection = ["-x", "-q", "-p", "no:cacheprovider", "-m", "not slow"] + (["-k", area.skip] if area.skip else [])
         f.write(f"pytest_add_cli_args = {quoted(selection)}\n")
+    if area.clear_caches:
+        with open(clone / "tests" / "conftest.py", "a") as f:
+            f.write(CACHE_CLEARING.format(modules=list(area.clear_caches)))
+
+
+CACHE_CLEARING = """
+
+@pytest.fixture(autouse=True)
+def _empty_caches_for_mutmut():  # written by scripts/mutation_score.py into its clone only
+    import functools, importlib
+    for name in {modules!r}:
+        for value in vars(importlib.import_module(name)).values():
+            if isinstance(value, functools._lru_cache_wrapper):
+                value.cache_clear()
+    yield
+"""
 
 
 def parse_results(text: str) -> dict[str, list[str]]:
