@@ -80,7 +80,7 @@ AREAS: dict[str, Area] = {
                   ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py",
                    "tests/test_beats_survivors.py")),
     "music-features": Area(("src/choreo/music/chroma.py", "src/choreo/music/features.py", "src/choreo/music/music.py"),
-                           ("tests/test_chroma.py", "tests/test_music.py", "tests/test_spectrum.py"),
+                           ("tests/test_chroma.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_music_survivors.py"),
                            clear_caches=("choreo.music.chroma",)),  # the constant-Q filter bank is cached
     "skeleton": Area(("src/choreo/skeleton/*",),
                      ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py",
