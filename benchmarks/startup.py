@@ -17,7 +17,7 @@ Since the second session of 2026-12-03 SGMD's chroma is choreo's own (choreo.mus
 "as before" row of `generate` also pays librosa's first chroma_cens and the sympy import that a
 random draw on torch's meta device brought (SGMD's weight check, fixed the same day). Since
 2026-12-04 the backend loads on a thread while the song is analysed (choreo.pipeline.PendingBackend);
-the "loaded first" rows import torch and the backend's module before the command runs, as the
+the "loaded first" rows import torch and that backend's module before the command runs, as the
 sequential code paid for them. Last, a folder of 20 songs in one call against the sum of their
 sampling times.
 """
@@ -40,7 +40,7 @@ AS_BEFORE = "import librosa.beat, librosa.decompose; "
 CHROMA = ("import numpy, librosa; "  # what SGMD's features paid until choreo.music.chroma (2026-12-03)
           "librosa.feature.chroma_cens(y=numpy.random.rand(30720).astype('float32'), sr=15360); ")
 META_DRAW = "import torch; torch.empty(1, device='meta').normal_(); "  # what SGMD's weight check imported until 2026-12-03 (sympy)
-LOADED_FIRST = "import torch, choreo_sgmd.generator, choreo_graph.generator; "  # the imports a sequential load paid before the analysis
+LOADED_FIRST = "import torch, choreo_{}.generator; "  # what a sequential load paid before the analysis, per backend
 BATCH_SONGS = 20
 TIMBRE = ("import numpy, librosa; y = numpy.random.rand(30720).astype('float32'); "
           "librosa.feature.chroma_cens(y=y, sr=15360); librosa.feature.melspectrogram(y=y, sr=15360); "
@@ -80,10 +80,10 @@ def main() -> None:
             ("choreo info song.wav (music analysis)", ["info", song], ""),
             ("  as before", ["info", song], AS_BEFORE + TIMBRE),
             ("choreo generate 60 s song", ["generate", song, "-o", dance], ""),
-            ("  loaded first", ["generate", song, "-o", dance], LOADED_FIRST),
+            ("  loaded first", ["generate", song, "-o", dance], LOADED_FIRST.format("sgmd")),
             ("  as before", ["generate", song, "-o", dance], AS_BEFORE + CHROMA + META_DRAW),
             ("choreo graph 60 s song", ["graph", song, "-o", dance], ""),
-            ("  loaded first", ["graph", song, "-o", dance], LOADED_FIRST),
+            ("  loaded first", ["graph", song, "-o", dance], LOADED_FIRST.format("graph")),
             ("  as before", ["graph", song, "-o", dance], AS_BEFORE + TIMBRE),
         ]
         print("| command | wall (s) | CPU (s) | wall / command's | CPU / command's |")

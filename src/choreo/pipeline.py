@@ -41,7 +41,7 @@ _BACKENDS: dict[tuple, "Generator"] = {}
 def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options) -> "Generator":
     """The backend ``name`` loaded from ``checkpoint`` (default: its bundled one), kept for reuse:
     a script dancing many songs loads the weights once."""
-    return PendingBackend(name, checkpoint, **factory_options).result()
+    return PendingBackend(name, checkpoint, background=False, **factory_options).result()
 
 
 class PendingBackend:
@@ -54,7 +54,8 @@ class PendingBackend:
     at once; an error while loading is raised by :meth:`result`.
     """
 
-    def __init__(self, name: str, checkpoint: str | os.PathLike | None = None, **factory_options):
+    def __init__(self, name: str, checkpoint: str | os.PathLike | None = None, background: bool = True,
+                 **factory_options):
         self.name, self.plugin = name, _available_plugin(name)
         if checkpoint is None:
             checkpoint = self.plugin.default_checkpoint
@@ -65,10 +66,14 @@ class PendingBackend:
         self._key = (name, str(checkpoint), tuple(sorted((k, str(v)) for k, v in factory_options.items())))
         self._error: BaseException | None = None
         self._thread = None
-        if self._key not in _BACKENDS:
-            self._thread = threading.Thread(target=self._load, args=(checkpoint, factory_options),
-                                            name=f"choreo: loading {name}", daemon=True)  # Ctrl-C need not wait for it
-            self._thread.start()
+        if self._key in _BACKENDS:
+            return
+        if not background:  # nothing to overlap with: load here
+            self._load(checkpoint, factory_options)
+            return
+        self._thread = threading.Thread(target=self._load, args=(checkpoint, factory_options),
+                                        name=f"choreo: loading {name}", daemon=True)  # Ctrl-C need not wait for it
+        self._thread.start()
 
     @property
     def listens_to_spectrum(self) -> bool:
