@@ -37,7 +37,9 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
         "music_dim": FEATURE_DIM + RHYTHM_DIM if options.rhythm else None}))
     diffusion = DiffusionConfig(**given({"style_dropout": options.style_dropout, "prediction": options.prediction,
                                          "snr_gamma": options.snr_gamma, "sigma_data": options.sigma_data,
-                                         "reconstruction_weight": options.reconstruction_weight}))
+                                         "reconstruction_weight": options.reconstruction_weight,
+                                         "foot_weight": options.foot_weight, "contact_source": options.contact_source,
+                                         "stepping_weight": options.stepping_weight, "leg_weight": options.leg_weight}))
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]
@@ -49,7 +51,7 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
                                      model.music_dim,
                                      frame_stride=model.frame_stride) if test_clips else None)
     return train(model, train_config, train_data, validation, out_dir, resume=resume, diffusion_config=diffusion,
-                 progress=progress)
+                 progress=progress, init_from=options.init_from)
 
 
 def build_generator(checkpoint: str | Path, **options):

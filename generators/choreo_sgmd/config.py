@@ -10,6 +10,7 @@ from choreo.music import FEATURE_DIM
 STYLE_MODES = ("modulation", "concat", "none")  # paper's Style Modulation, its concat ablation, EDGE
 STYLE_INITS = ("random", "zero")  # the style projection's initial weights (zero: the style branch starts as the identity)
 PROMPT_KINDS = ("description", "name", "onehot")  # the paper's three kinds of style prompt
+CONTACT_SOURCES = ("predicted", "target")  # whose foot contacts the foot term pins: the model's (EDGE) or the data's (MDM)
 PREDICTIONS = ("x0", "v")  # what the network outputs: x0 itself (EDGE), or v, turned into x0 (model.py)
 
 
@@ -64,8 +65,15 @@ class DiffusionConfig:
     velocity_weight: float = 2.964
     joint_weight: float = 0.646
     foot_weight: float = 10.942
+    contact_source: str = "predicted"  # contacts that pin the feet: the model's own (EDGE) or the data's ("target")
+    stepping_weight: float = 0.0  # the feet's world speeds against the data's, in (m/s)^2 (docs/sgmd.md, "Feet")
+    leg_weight: float = 1.0  # the legs' rotation channels' weight inside the reconstruction term
 
     def __post_init__(self):
+        if self.contact_source not in CONTACT_SOURCES:
+            raise ValueError(f"contact_source must be one of {CONTACT_SOURCES}, got {self.contact_source!r}")
+        if self.stepping_weight < 0 or self.foot_weight < 0 or self.leg_weight <= 0:
+            raise ValueError("foot_weight and stepping_weight must be >= 0, leg_weight > 0")
         if not 0 < self.sigma_data <= 10:
             raise ValueError(f"sigma_data must be in (0, 10], got {self.sigma_data}")
         if self.snr_gamma < 0:

@@ -2,7 +2,8 @@
 
 All but the reconstruction term are computed on de-normalised motion, where they mean something
 physical: joint positions in metres through SMPL-24 forward kinematics, and feet that should stay
-still on frames the model itself marks as in contact.
+still on frames marked as in contact: by the model itself (EDGE) or by the data (MDM), which the
+model cannot switch off by predicting no contact (docs/sgmd.md, "Feet").
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ import torch
 import torch.nn.functional as F
 
 from choreo.motion.vector import CONTACT_SLICE, ROOT_SLICE, ROTATION_SLICE
-from choreo.skeleton import FOOT_JOINTS, SMPL24, forward_kinematics_torch, rot6d_to_matrix
+from choreo.skeleton import FOOT_JOINTS, LOWER_BODY_JOINTS, SMPL24, forward_kinematics_torch, rot6d_to_matrix
 
-from .config import DiffusionConfig
+from .config import CONTACT_SOURCES, DiffusionConfig
 from .normalizer import Normalizer
 
 CONTACT_THRESHOLD = 0.95  # predicted contact above this pins the foot (EDGE)
+FPS = 30.0  # foot speeds in the stepping term are in m/s at the training frame rate
 
 
 @dataclass
@@ -27,10 +29,12 @@ class LossTerms:
     velocity: torch.Tensor
     joints: torch.Tensor
     foot: torch.Tensor
+    stepping: torch.Tensor  # the feet's world speeds against the data's, in (m/s)^2
 
     def total(self, config: DiffusionConfig) -> torch.Tensor:
-        return (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
-                + config.joint_weight * self.joints + config.foot_weight * self.foot)
+        total = (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
+                 + config.joint_weight * self.joints + config.foot_weight * self.foot)
+        return total + config.stepping_weight * self.stepping if config.stepping_weight else total
 
 
 def joint_positions(vectors: torch.Tensor) -> torch.Tensor:
@@ -40,20 +44,45 @@ def joint_positions(vectors: torch.Tensor) -> torch.Tensor:
     return forward_kinematics_torch(rotations, vectors[..., ROOT_SLICE], offsets, SMPL24.parents)
 
 
+def leg_channels(frame_dim: int) -> torch.Tensor:
+    """(frame_dim,) bool: the 6D rotation channels of the legs (hips, knees, ankles, toes)."""
+    legs = torch.zeros(frame_dim, dtype=torch.bool)
+    for joint in LOWER_BODY_JOINTS[1:]:  # not the pelvis: it carries the facing, which the network already reads
+        start = ROTATION_SLICE.start + 6 * joint
+        legs[start: start + 6] = True
+    return legs
+
+
 def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: Normalizer,
-                     weights: torch.Tensor | None = None) -> LossTerms:
+                     weights: torch.Tensor | None = None, contact_source: str = "predicted",
+                     leg_weight: float = 1.0) -> LossTerms:
     """predicted and target x0 in normalised space, (B, T, 151); ``weights`` (B,) weigh each
-    window's terms (min-SNR weighting: ``snr_weights``), uniform when None."""
-    reconstruction = _per_window(F.mse_loss(predicted, target, reduction="none"))
+    window's terms (min-SNR weighting: ``snr_weights``), uniform when None; ``contact_source``:
+    which contact labels pin the feet in the foot term (CONTACT_SOURCES); ``leg_weight``: the
+    legs' rotation channels weigh this much in the reconstruction term (1: like every channel)."""
+    squared = F.mse_loss(predicted, target, reduction="none")
+    if leg_weight != 1.0:
+        squared = squared * torch.where(leg_channels(predicted.shape[-1]).to(predicted.device), leg_weight, 1.0)
+    reconstruction = _per_window(squared)
     velocity = _per_window(F.mse_loss(predicted[:, 1:] - predicted[:, :-1], target[:, 1:] - target[:, :-1], reduction="none"))
     predicted_motion, target_motion = normalizer.denormalize(predicted), normalizer.denormalize(target)
     predicted_joints, target_joints = joint_positions(predicted_motion), joint_positions(target_motion)
     joints = _per_window(F.mse_loss(predicted_joints, target_joints, reduction="none"))
-    feet_velocity = predicted_joints[:, 1:, list(FOOT_JOINTS)] - predicted_joints[:, :-1, list(FOOT_JOINTS)]
-    in_contact = (predicted_motion[:, :-1, CONTACT_SLICE] > CONTACT_THRESHOLD).to(predicted.dtype)
+    feet_velocity = foot_velocity(predicted_joints)
+    if contact_source not in CONTACT_SOURCES:
+        raise ValueError(f"contact_source must be one of {CONTACT_SOURCES}, got {contact_source!r}")
+    contacts = predicted_motion if contact_source == "predicted" else target_motion
+    in_contact = (contacts[:, :-1, CONTACT_SLICE] > CONTACT_THRESHOLD).to(predicted.dtype)
     foot = _per_window(feet_velocity.pow(2).sum(-1) * in_contact)  # no gradient through the contact mask
+    stepping = _per_window((feet_velocity - foot_velocity(target_joints)).mul(FPS).pow(2).sum(-1))
     weigh = (lambda term: term.mean()) if weights is None else (lambda term: (term * weights).mean())  # noqa: E731
-    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot))
+    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping))
+
+
+def foot_velocity(joints: torch.Tensor) -> torch.Tensor:
+    """(B, T, 24, 3) joint positions -> (B, T - 1, 4, 3) foot joints' displacement per frame."""
+    feet = joints[:, :, list(FOOT_JOINTS)]
+    return feet[:, 1:] - feet[:, :-1]
 
 
 def _per_window(values: torch.Tensor) -> torch.Tensor:

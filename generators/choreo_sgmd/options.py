@@ -98,3 +98,8 @@ class TrainOptions:
     sigma_data: float | None = None
     snr_gamma: float | None = None
     reconstruction_weight: float | None = None  # the x0 term's weight (EDGE: 0.636), the one term on every rotation
+    foot_weight: float | None = None  # the foot term's weight (EDGE: 10.942)
+    contact_source: str | None = None  # contacts the foot term pins: "predicted" (EDGE) or "target" (the data's)
+    stepping_weight: float | None = None  # feet's world speeds against the data's (0: off)
+    leg_weight: float | None = None  # the legs' rotation channels' weight in the x0 term (1: as every channel)
+    init_from: str | None = None  # a training state to fine-tune from (same network)

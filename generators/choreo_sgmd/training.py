@@ -62,6 +62,7 @@ class Trainer:
         self.weights = train.sampling_weights(train_config.genre_balance)
         self.step = 0
         self.history: list[list[float]] = []  # [step, train loss, validation loss or -1]
+        self.started_from: dict | None = None  # {"checkpoint", "step"} of a fine-tuning run's starting point
 
     def batch(self, generator: torch.Generator, data: WindowTensors, indices: torch.Tensor, share: slice = slice(None)):
         """The random draws of a whole batch (from the CPU generator, so any device and any number of
@@ -82,7 +83,9 @@ class Trainer:
         predicted = model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style)
         gamma = self.diffusion_config.snr_gamma
         weights = snr_weights(self.schedule.alpha_bar(t).to(x0.dtype), gamma) if gamma else None
-        return diffusion_losses(predicted, x0, self.normalizer, weights).total(self.diffusion_config)
+        terms = diffusion_losses(predicted, x0, self.normalizer, weights, self.diffusion_config.contact_source,
+                                 self.diffusion_config.leg_weight)
+        return terms.total(self.diffusion_config)
 
     def train_step(self) -> float:
         generator = _step_generator(self.config.seed, self.step)
@@ -131,6 +134,7 @@ class Trainer:
             "state_dict": self.model.state_dict(), "ema_state_dict": self.ema.state_dict(),
             "optimizer": self.optimizer.state_dict(), "normalizer": self.normalizer.state_dict(),
             "music_scaler": self.music_scaler.state_dict(), "step": self.step, "history": self.history,
+            **({"started_from": self.started_from} if self.started_from else {}),
         }  # fmt: skip
 
     def check_resumable(self, state: dict) -> None:
@@ -153,6 +157,18 @@ class Trainer:
         self.normalizer = Normalizer.from_state_dict(state["normalizer"]).to(self.device)
         self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"]).to(self.device)
         self.step, self.history = int(state["step"]), [list(row) for row in state["history"]]
+        self.started_from = state.get("started_from")
+
+    def start_from(self, state: dict, name: str) -> None:
+        """Fine-tune: another run's weights, optimiser and step, under this run's losses and data
+        settings (the network must be the same)."""
+        stored = asdict(ModelConfig(**state["model_config"]))
+        changed = [f"{key} {value!r} -> {getattr(self.model_config, key)!r}" for key, value in stored.items()
+                   if getattr(self.model_config, key) != value]
+        if changed:
+            raise ValueError(f"cannot start from {name}: its network differs ({'; '.join(changed)})")
+        self.load_state(state)
+        self.started_from = {"checkpoint": name, "step": int(state["step"])}
 
 
 def process_group() -> tuple[torch.device, int, int]:
@@ -172,8 +188,9 @@ def process_group() -> tuple[torch.device, int, int]:
 def train(model_config: ModelConfig, train_config: TrainConfig, train_data: WindowTensors,
           validation_data: WindowTensors | None, out_dir: str | Path, resume: bool = False,
           diffusion_config: DiffusionConfig = DiffusionConfig(),
-          progress: Callable[[TrainProgress], None] | None = None) -> Path:
-    """Train until ``train_config.max_steps``; checkpoints go to ``out_dir/last.pt`` atomically."""
+          progress: Callable[[TrainProgress], None] | None = None, init_from: str | Path | None = None) -> Path:
+    """Train until ``train_config.max_steps``; checkpoints go to ``out_dir/last.pt`` atomically.
+    ``init_from``: a training state to fine-tune (ignored when resuming this run's own last.pt)."""
     if train_config.num_threads:
         torch.set_num_threads(train_config.num_threads)
     device, rank, world = process_group()
@@ -188,6 +205,8 @@ def train(model_config: ModelConfig, train_config: TrainConfig, train_data: Wind
         state = load_checkpoint(checkpoint)
         trainer.check_resumable(state)
         trainer.load_state(state)
+    elif init_from is not None:
+        trainer.start_from(load_checkpoint(init_from), Path(init_from).name)
     lead = rank == 0  # validates, writes checkpoints and reports progress
     started, seen, losses = time.perf_counter(), 0, []
     while trainer.step < train_config.max_steps:

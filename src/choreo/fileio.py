@@ -7,7 +7,9 @@ or Ctrl-C never leaves a truncated BVH/NPZ behind for a batch script to pick up.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import stat
 import sys
 import tempfile
 from pathlib import Path
@@ -16,6 +18,7 @@ from typing import IO, Iterator
 from .errors import OutputError
 
 STDOUT = "-"
+OUT_OF_SPACE = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}  # a full disk, a quota, a file-size limit
 
 
 def check_output_dir(path: str | os.PathLike) -> Path:
@@ -41,8 +44,9 @@ def atomic_output(path: str | os.PathLike, binary: bool = True) -> Iterator[IO]:
         buffer = io.BytesIO() if binary else io.StringIO()
         yield buffer
         stream = sys.stdout.buffer if binary else sys.stdout
-        stream.write(buffer.getvalue())
-        stream.flush()
+        with out_of_space_is_an_output_error(path):
+            stream.write(buffer.getvalue())
+            stream.flush()
         return
 
     with atomic_path(path) as temporary:
@@ -54,25 +58,76 @@ def atomic_output(path: str | os.PathLike, binary: bool = True) -> Iterator[IO]:
 
 def output_target(path: str | os.PathLike) -> Path:
     """The regular file an output to ``path`` replaces: ``path`` itself, or the file a symlink at
-    ``path`` points to (written through, so the link stays). Anything else that exists there (a
+    ``path`` leads to (written through, so the link stays) where the kernel's
+    ``fs.protected_symlinks`` rule lets choreo follow it. Anything else that exists there (a
     folder, a FIFO, a device such as /dev/null) is refused: replacing it would destroy it."""
     path = check_output_dir(path)
     try:
-        return _regular_file_at(path)
+        return _regular_file_at(path, _follow_links(path))
     except OSError as error:  # a name too long for the file system, say
         raise OutputError(f"cannot write {path}: {error.strerror}") from None
 
 
-def _regular_file_at(path: Path) -> Path:
-    if os.path.islink(path):
-        resolved = Path(os.path.realpath(path))
-        if resolved.is_file():
-            return check_output_dir(resolved)
-        raise OutputError(f"cannot write {path}: it is a link to something that is not a regular file")
-    if path.exists() and not path.is_file():
+MAX_LINKS = 40  # the kernel's own limit on links followed in one path
+
+
+def _follow_links(path: Path) -> Path:
+    """Where the chain of symlinks at ``path`` ends, one link at a time, each checked by
+    :func:`_check_link_may_be_followed`. Only the last name is read here: links among the folders
+    above it are left to the kernel (``..`` in a link's target included), which resolves them
+    when the file is written."""
+    start = path
+    for _ in range(MAX_LINKS):
+        if not os.path.islink(path):
+            return path
+        _check_link_may_be_followed(path, start)
+        target = Path(os.readlink(path))
+        path = target if target.is_absolute() else path.parent / target
+    raise OutputError(f"cannot write {start}: too many levels of symbolic links")
+
+
+def _check_link_may_be_followed(link: Path, output: Path) -> None:
+    """The kernel's ``fs.protected_symlinks`` rule, applied whatever the sysctl says: in a sticky
+    world-writable folder (/tmp) a link is followed only if its owner is us or the folder's owner.
+    Otherwise another user could plant a link there and have choreo replace a file of theirs."""
+    folder = os.stat(link.parent if str(link.parent) else ".")
+    shared = folder.st_mode & stat.S_ISVTX and folder.st_mode & stat.S_IWOTH
+    owner = os.lstat(link).st_uid
+    if shared and owner not in (os.geteuid(), folder.st_uid):
+        raise OutputError(f"cannot write {output}: it is a link owned by another user in the shared folder "
+                          f"{link.parent} (not followed, as the kernel's protected_symlinks rule says)")
+
+
+def _regular_file_at(path: Path, end: Path) -> Path:
+    """``end`` (where the links at ``path`` lead) if writing there replaces at most a regular file."""
+    if end.exists() and not end.is_file():
+        if end != path:
+            raise OutputError(f"cannot write {path}: it is a link to something that is not a regular file")
         kind = "a folder" if path.is_dir() else "not a regular file"
         raise OutputError(f"cannot write {path}: it exists and is {kind}")
-    return path
+    return check_output_dir(end)
+
+
+def output_mode(target: Path) -> int:
+    """The permissions an output gets, as ``cp`` and editors give them: those of the file it
+    replaces (a private 0600 file stays private), else the default for a new file under the umask."""
+    try:
+        return stat.S_IMODE(os.stat(target).st_mode) & 0o777
+    except FileNotFoundError:
+        return 0o666 & ~current_umask()
+
+
+def current_umask() -> int:
+    """The process's umask, read without changing it where Linux tells it (another thread may be
+    creating files), else by the usual set-and-restore."""
+    with contextlib.suppress(OSError):
+        with open("/proc/self/status", encoding="ascii", errors="replace") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 @contextlib.contextmanager
@@ -88,8 +143,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         raise OutputError(f"cannot write {path}: {error.strerror}") from None
     os.close(fd)
     try:
-        yield Path(tmp_name)
-        os.chmod(tmp_name, 0o644)
+        with out_of_space_is_an_output_error(path):
+            yield Path(tmp_name)
+        os.chmod(tmp_name, output_mode(target))
         try:
             os.replace(tmp_name, target)
         except OSError as error:
@@ -98,3 +154,15 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp_name)
         raise
+
+
+@contextlib.contextmanager
+def out_of_space_is_an_output_error(path: str | os.PathLike) -> Iterator[None]:
+    """No room for an output (full disk, quota, ``ulimit -f``) is the user's output error, exit 3
+    with one line, however deep in a writer (numpy, zipfile, json) the write failed."""
+    try:
+        yield
+    except OSError as error:
+        if error.errno not in OUT_OF_SPACE:
+            raise
+        raise OutputError(f"cannot write {path}: {error.strerror}") from None

@@ -7,6 +7,8 @@
 Steps: analyse the song (or take a :class:`~choreo.music.Music`), build the constraints against
 its frames, let the backend dance, then the finishing passes (beat lock on, foot lock off, as
 measured in docs/results.md). Writing files is the caller's business (``choreo.formats``).
+The beats are the tracker's unless the caller knows them: ``bpm=128`` or ``beats="beats.csv"``
+(choreo.music.beat_source); the dance's metadata says which (``"beats"``).
 """
 
 from __future__ import annotations
@@ -138,6 +140,9 @@ def dance(
     finishing: Finishing = Finishing(),
     analysis_progress: Callable[[float, float], None] | None = None,
     progress: Callable[[float], None] | None = None,
+    bpm: float | None = None,
+    beats: str | os.PathLike | None = None,
+    threads: int | None = None,
 ) -> "Motion":
     """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
 
@@ -146,22 +151,33 @@ def dance(
     steps, guidance, sampler; graph: top_k, ...); ``constraints``
     (or a function building them from the analysed music) fix frames, joints or a root path.
     ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps.
+    ``bpm`` (the tempo; the phase is still tracked) or ``beats`` (a file of beat times, see
+    choreo.music.beat_file) replace the tracked beats everywhere: features, beat lock, backend.
+    ``threads``: torch threads for the dance (default: the CPUs other work leaves idle, choreo.threads).
     """
+    from .errors import ParameterError
     from .finishing import finish
     from .generator import GenerationRequest
-    from .music import Music
+    from .threads import use_threads
+    from .music import BeatSource, Music
 
     check_request(generator if isinstance(generator, str) else generator.name, options or {},
                   constraints is not None)  # before any work
+    beat_source = BeatSource.from_options(bpm, beats)
+    if isinstance(song, Music) and (bpm is not None or beats is not None):
+        raise ParameterError("the music is already analysed: give bpm or beats to Music.from_file instead")
     backend = PendingBackend(generator, checkpoint) if isinstance(generator, str) else generator
     music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress,
                                                                   log_mel=backend.listens_to_spectrum,
-                                                                  timbre=backend.reads_timbre)
+                                                                  timbre=backend.reads_timbre, beats=beat_source)
     if isinstance(backend, PendingBackend):
         backend = backend.result()
     fixed = constraints(music) if callable(constraints) else constraints
     request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
+    use_threads(threads)  # chosen now, beside whatever else runs now
     motion = backend.generate(request, progress=progress)
     frames = None if fixed is None else fixed.fixed_frames()
-    return finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock,
-                  speed=finishing.speed_limit)
+    finished = finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock,
+                      speed=finishing.speed_limit)
+    finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
+    return finished

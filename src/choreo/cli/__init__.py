@@ -11,10 +11,28 @@ import sys
 import warnings
 
 from .app import app
+from .interrupts import signals_raise
+from .text import plain
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script; returns the exit code (also used by tests)."""
+    """Entry point of the console script; returns the exit code (also used by tests).
+
+    SIGINT and SIGTERM unwind the command as exceptions (see :mod:`.interrupts`), so outputs and
+    children are cleaned up; the exit code is then the shell's 128 + signal (130, 143)."""
+    with signals_raise() as received:
+        try:
+            code = _run(argv)
+        except KeyboardInterrupt:  # past typer's reach, e.g. while an error was being printed
+            code = 130
+    if received.signum is not None or code == 130:
+        _print_error(f"interrupted ({received.name})")
+        return received.exit_code
+    return code
+
+
+def _run(argv: list[str] | None) -> int:
+    """The command's exit code: every ChoreoError one line on stderr, anything else a bug (70)."""
     from ..errors import ChoreoError
 
     try:
@@ -23,13 +41,10 @@ def main(argv: list[str] | None = None) -> int:
                 # numpy's overflow / invalid-value notes mean nothing to a user, and what they warn of
                 # is checked where it matters (non-finite motion, audio and features are refused).
                 warnings.filterwarnings("ignore", category=RuntimeWarning)
-            app(args=argv, prog_name="choreo", standalone_mode=False)
+            code = app(args=argv, prog_name="choreo", standalone_mode=False)  # typer: Ctrl-C is 130
     except ChoreoError as error:
         _print_error(str(error))
         return error.exit_code
-    except KeyboardInterrupt:
-        _print_error("interrupted")
-        return 130
     except SystemExit as exit_:
         return exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)
     except Exception as error:
@@ -45,12 +60,12 @@ def main(argv: list[str] | None = None) -> int:
             raise
         _print_error(f"internal error ({type(error).__name__}: {error}); set CHOREO_DEBUG=1 for a traceback")
         return 70
-    return 0
+    return code if isinstance(code, int) else 0
 
 
 def _print_error(message: str) -> None:
-    first_line = message.strip().splitlines()[0] if message.strip() else "failed"
-    print(f"choreo: error: {first_line}", file=sys.stderr)
+    """One line on stderr, whatever the message holds (newlines, escapes, undecodable bytes)."""
+    print(f"choreo: error: {plain(message.strip()) or 'failed'}", file=sys.stderr)
 
 
 def run() -> None:  # pragma: no cover - console script

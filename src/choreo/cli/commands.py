@@ -7,7 +7,9 @@ from typing import Optional
 
 import typer
 
+from .generate_command import BEATS, BPM, beat_source
 from .progress import progress_bar, stderr_console, stdout_console
+from .text import markup
 
 AUDIO_EXTENSIONS = (".wav", ".mp3", ".ogg", ".flac", ".opus")
 
@@ -26,28 +28,40 @@ def _require_file(path: Path) -> Path:
 
 def info(
     path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json, glb; - reads stdin) or an audio file."),
+    bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
 ) -> None:
     """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats).
+
+    A song's beats are the ones the dancing commands would use with the same --bpm or --beats.
 
     Examples:
       choreo info dance.bvh
       choreo info examples/drum_and_bass_174bpm.wav
+      choreo info song.mp3 --bpm 128                      # the beats choreo generate --bpm 128 dances to
       choreo generate song.mp3 -o - -f npz | choreo info -
     """
     _require_file(path)
+    from ..errors import ParameterError
+
+    is_song = path.suffix.lower() in AUDIO_EXTENSIONS
+    if not is_song and (bpm is not None or beats is not None):
+        raise ParameterError("--bpm and --beats describe a song, not a motion file")
+    source = beat_source(bpm, beats) if is_song else None
     from rich.table import Table
 
     table = Table(show_header=False, box=None)
-    table.add_row("file", str(path))
-    if path.suffix.lower() in AUDIO_EXTENSIONS:
+    table.add_row("file", markup(path))
+    if is_song:
         from ..music import Music
 
         with progress_bar(f"analysing {path.name}") as update:
-            music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)), timbre=False)
+            music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)), timbre=False,
+                                    beats=source)
         table.add_row("kind", "audio")
         table.add_row("duration", f"{music.duration:.2f} s")
         table.add_row("tempo", f"{music.tempo:.1f} bpm")
-        table.add_row("beats", str(len(music.beat_times)))
+        table.add_row("beats", markup(f"{len(music.beat_times)} ({music.beat_source})"))
+        table.add_row("beat times", _first_times(music.beat_times))
         table.add_row("feature frames", f"{music.num_frames} at {music.fps:g} fps")
     else:
         from ..formats import read_motion
@@ -58,10 +72,18 @@ def info(
         table.add_row("frames", str(motion.num_frames))
         table.add_row("fps", f"{motion.fps:g}")
         table.add_row("duration", f"{motion.duration:.2f} s")
-        table.add_row("joints", f"{motion.num_joints} ({', '.join(motion.skeleton.names[:4])}, ...)")
+        table.add_row("joints", markup(f"{motion.num_joints} ({', '.join(motion.skeleton.names[:4])}, ...)"))
         extent = positions.max(axis=(0, 1)) - positions.min(axis=(0, 1))
         table.add_row("extent", f"x {extent[0]:.2f} m, y {extent[1]:.2f} m, z {extent[2]:.2f} m")
     stdout_console.print(table)
+
+
+def _first_times(times, shown: int = 8) -> str:
+    """'0.52 0.87 1.22 ... s': the first beats, enough to check them against a DAW."""
+    if len(times) == 0:
+        return "none"
+    more = " ..." if len(times) > shown else ""
+    return " ".join(f"{t:.3f}" for t in times[:shown]) + more + " s"
 
 
 def convert(
@@ -87,7 +109,8 @@ def convert(
         motion = motion.resample(fps)
     written = write_motion(motion, target, format=format, rig=rig)
     if target != "-":
-        stderr_console.print(f"wrote {written} ({motion.num_frames} frames at {motion.fps:g} fps)")
+        stderr_console.print(f"wrote {markup(written)} ({motion.num_frames} frames at {motion.fps:g} fps)",
+                             highlight=False)
 
 
 def generators() -> None:
@@ -103,7 +126,7 @@ def generators() -> None:
     table = Table("name", "ready", "what it does")
     for plugin in available_plugins().values():
         ready = "yes" if plugin.ready else f"no - {plugin.status}"
-        table.add_row(plugin.name, ready, plugin.summary)
+        table.add_row(markup(plugin.name), markup(ready), markup(plugin.summary))
     stdout_console.print(table)
 
 
@@ -129,8 +152,8 @@ def prepare(
 
     table = Table("clip", "genre", "split", "frames", "seconds")
     for clip in clips:
-        table.add_row(clip.name, clip.genre or "-", clip.split or "-", str(clip.motion.num_frames),
-                      f"{clip.motion.duration:.1f}")
+        table.add_row(markup(clip.name), markup(clip.genre or "-"), markup(clip.split or "-"),
+                      str(clip.motion.num_frames), f"{clip.motion.duration:.1f}")
     stdout_console.print(table)
     total_seconds = sum(c.motion.duration for c in clips)
     stdout_console.print(f"{len(clips)} clips, {total_seconds / 60:.1f} min, {len(windows)} windows of {window:g} s "

@@ -55,7 +55,7 @@ def evaluate(
     up: str = typer.Option("y", help="Up axis of .npy joint arrays and all inputs: y (ours, AIST++) or z (EDGE)."),
     json_path: Optional[Path] = typer.Option(None, "--json", help="Write every figure and per-file scores here."),
 ) -> None:
-    """Score dances with BeatAlign, PFC, FID_k, FID_g, Div_k, Div_g and the two beat distances.
+    """Score dances with BeatAlign, PFC, FID_k, FID_g, Div_k, Div_g, the two beat distances and stepping.
 
     FID and diversity features are normalised by the ground-truth set, as in Bailando.
     BeatAlign needs music: a song with the motion's name beside it or in --music.
@@ -68,6 +68,7 @@ def evaluate(
     from ..metrics import MetricWarning
     from ..metrics import evaluate as run_evaluation
     from ..metrics.evaluate import collect_motion_files
+    from .text import markup
 
     if up not in ("y", "z"):
         raise ParameterError(f"--up must be y or z, got {up!r}")
@@ -84,7 +85,7 @@ def evaluate(
         report = run_evaluation(dances, truth, fps)
     messages = sorted({str(w.message) for w in caught if issubclass(w.category, MetricWarning)})
     for message in messages:
-        stderr_console.print(f"[yellow]warning:[/yellow] {message}")
+        stderr_console.print(f"[yellow]warning:[/yellow] {markup(message)}")
     _print_report(report)
     if json_path is not None:
         from ..fileio import atomic_output
@@ -93,7 +94,7 @@ def evaluate(
                     "notes": notes + truth_notes, "warnings": messages}
         with atomic_output(json_path) as handle:
             handle.write(json.dumps(document, indent=1, default=_json_default).encode())
-        stderr_console.print(f"wrote {json_path}")
+        stderr_console.print(f"wrote {markup(json_path)}")
 
 
 def _json_default(value):
@@ -121,6 +122,9 @@ def _print_report(report) -> None:
         ("Div_k", report.div_k, report.ground_truth_div_k), ("Div_g", report.div_g, report.ground_truth_div_g),
         ("beat distance motion->music (frames^2)", report.motion_to_music, None),
         ("beat distance music->motion (frames^2)", report.music_to_motion, None),
+        ("planted foot, share of frames", report.planted_share, report.ground_truth_planted_share),
+        ("faster foot ~ root speed (correlation)", report.foot_root_correlation, report.ground_truth_foot_root_correlation),
+        ("support foot slide (m per m travelled)", report.support_slide, report.ground_truth_support_slide),
     ]  # fmt: skip
     for name, generated, truth in rows:
         table.add_row(name, _fmt(generated), _fmt(truth))

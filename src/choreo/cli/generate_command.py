@@ -9,11 +9,15 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, List, Optional
+from typing import TYPE_CHECKING, Callable, List, Optional
 
 import typer
 
 from .progress import progress_bar, stderr_console
+from .text import markup
+
+if TYPE_CHECKING:
+    from ..music.beat_source import BeatSource
 
 SONG = typer.Argument(..., help="Audio file: wav, mp3, ogg, flac or opus.")
 OUTPUT = typer.Option(..., "-o", "--output",
@@ -36,6 +40,12 @@ FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
                          help="Let planted feet carry the body instead of sliding (halves PFC, doubles FID_g: off by default).")
 SPEED_LIMIT = typer.Option(True, "--speed-limit/--no-speed-limit",
                            help="Spread turns and dashes faster than real dancers move over the frames around them.")
+BPM = typer.Option(None, "--bpm", help="The song's tempo, if you know it (20-300): beats exactly 60/BPM s apart, "
+                                       "placed on the song's onsets (default: the tracker's tempo).")
+THREADS = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs this job may use "
+                                                    "that other work leaves idle; OMP_NUM_THREADS is honoured).")
+BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
+                                           "(time[,downbeat]) as DAWs and beat trackers export.")
 
 
 def generate(
@@ -53,7 +63,12 @@ def generate(
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
-    rig: Optional[str] = RIG,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    threads: Optional[int] = THREADS,
+    shard: Optional[str] = typer.Option(None, "--shard", help="With --out-dir: dance only shard K of N (K/N, 1-based) of the "
+                                        "songs, e.g. 3/8 for a cluster array task; every song lands in exactly one shard."),
+    skip_existing: bool = typer.Option(False, "--skip-existing", help="With --out-dir: skip songs whose outputs are all "
+                                       "there already (a re-run after a failure or preemption does only what is missing)."),
 ) -> None:
     """Generate a dance for a song, or for many songs in one run.
 
@@ -65,14 +80,17 @@ def generate(
       choreo generate song.mp3 -o dance.bvh -o dance.npz --style "slow, romantic, hips leading" --seed 7
       choreo generate song.mp3 -o dance.bvh --style 0:30=waltz,30:=cha-cha --seed-motion opening.bvh
       choreo generate songs/*.mp3 --out-dir out/ --format bvh,npz --json
+      choreo generate songs/*.mp3 --out-dir out/ --shard 3/8 --skip-existing   # task 3 of an 8-task array
       choreo generate song.mp3 -o dance.bvh --preview      # and dance.mp4 to watch
       choreo generate song.mp3 -o dance.fbx --rig mixamo   # for a Mixamo character (needs Blender)
+      choreo generate song.mp3 -o dance.bvh --bpm 128      # or --beats beats.csv: beats you know
     """
     import json
 
     from collections import Counter
 
     from ..errors import ChoreoError, OutputError, ParameterError
+    from .batch import Shard, already_written
 
     if (output is None) == (out_dir is None):
         raise ParameterError("give either -o (one song) or --out-dir (any number of songs)")
@@ -88,9 +106,17 @@ def generate(
         clashes = sorted(stem for stem, count in stems.items() if count > 1)
         if clashes:
             raise ParameterError(f"songs named {clashes[0]!r} more than once would write the same files in --out-dir")
+    elif shard is not None or skip_existing:
+        raise ParameterError("--shard and --skip-existing split a batch: use them with --out-dir")
+    if shard is not None:
+        songs = Shard.parse(shard).select(songs)
 
     def outputs_for(song: Path) -> list[str]:
         return list(output) if output is not None else [str(out_dir / f"{song.stem}.{ext}") for ext in formats]
+
+    def done_before(song: Path) -> bool:
+        files = outputs_for(song)
+        return already_written(files + [str(Path(files[0]).with_suffix(".mp4"))] if preview else files)
 
     def constraints(music):
         from ..constraints import Constraints, as_smpl
@@ -103,10 +129,14 @@ def generate(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
-                        beat_lock, foot_lock, rig=rig, speed_limit=speed_limit, style_guidance=style_guidance)
+                        beat_lock, foot_lock, rig=rig, speed_limit=speed_limit, style_guidance=style_guidance,
+                        beats=beat_source(bpm, beats), threads=threads)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
+        if skip_existing and done_before(song):
+            summaries.append({"song": str(song), "ok": True, "skipped": True, "outputs": outputs_for(song)})
+            continue
         try:
             summaries.append(dance_one(backend, song, outputs_for(song), settings, constraints))
         except Exception as error:  # noqa: BLE001 - in a batch, one song's failure, even a bug, must not stop the rest
@@ -115,7 +145,7 @@ def generate(
             failed += 1
             code = error.exit_code if isinstance(error, ChoreoError) else 70
             message = str(error) if isinstance(error, ChoreoError) else f"internal error ({type(error).__name__}: {error})"
-            stderr_console.print(f"[red]failed[/red] {song}: {message}", highlight=False)
+            stderr_console.print(f"[red]failed[/red] {markup(song)}: {markup(message)}", highlight=False)
             summaries.append({"song": str(song), "ok": False, "error": message, "exit_code": code})
     if json_summary:
         print(json.dumps({"songs": summaries, "failed": failed}, indent=2))
@@ -132,7 +162,8 @@ def inbetween(
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
-    rig: Optional[str] = RIG,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    threads: Optional[int] = THREADS,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
 
@@ -162,7 +193,8 @@ def inbetween(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
-                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit)
+                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit,
+                        beats=beat_source(bpm, beats), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -175,7 +207,8 @@ def inpaint(
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
-    rig: Optional[str] = RIG,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    threads: Optional[int] = THREADS,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
 
@@ -200,7 +233,8 @@ def inpaint(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
-                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit)
+                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit,
+                        beats=beat_source(bpm, beats), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -211,7 +245,8 @@ def trajectory(
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
-    rig: Optional[str] = RIG,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    threads: Optional[int] = THREADS,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
 
@@ -227,7 +262,8 @@ def trajectory(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
-                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit)
+                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit,
+                        beats=beat_source(bpm, beats), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -249,6 +285,15 @@ class Settings:
     rig: str | None = None  # write .bvh/.fbx retargeted onto this rig (mixamo); None: SMPL-24
     speed_limit: bool = True  # finishing: joints and root no faster than real dancers move
     style_guidance: float | None = None  # None: the backend's default
+    beats: BeatSource | None = None  # --bpm or --beats; None: the tracker's beats
+    threads: int | None = None  # --threads; None: choreo.threads decides per dance
+
+
+def beat_source(bpm: float | None, beats: Path | None) -> BeatSource:
+    """The BeatSource of --bpm / --beats, checked (and the file read) before any work."""
+    from ..music.beat_source import BeatSource
+
+    return BeatSource.from_options(bpm, beats)
 
 
 def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None,
@@ -296,7 +341,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     from ..errors import ParameterError
     from ..fileio import output_target
     from ..formats import check_output_format, write_motions
-    from ..music import Music
+    from ..music import BeatSource, Music
     from ..pipeline import Finishing, dance
 
     if output.count("-") > 1 or (len(output) > 1 and settings.format):
@@ -308,7 +353,7 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     with progress_bar(f"analysing {song.name}") as update:
         music = Music.from_file(song, progress=lambda done, total: update(round(done), round(total)),
                                 log_mel=backend.listens_to_spectrum,  # one decode for every analysis
-                                timbre=backend.reads_timbre)
+                                timbre=backend.reads_timbre, beats=settings.beats or BeatSource())
     constraints = build_constraints(music) if build_constraints else None
     given = {"steps": settings.steps, "guidance": settings.guidance, "sampler": settings.sampler,
              "style_guidance": settings.style_guidance}
@@ -317,11 +362,12 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     with progress_bar("dancing", 100) as update:
         motion = dance(music, backend, style=settings.style, seed=settings.seed, options=options, constraints=constraints,
                        finishing=Finishing(settings.beat_lock, settings.foot_lock, settings.speed_limit),
+                       threads=settings.threads,
                        progress=lambda fraction: update(round(fraction * 100), 100))
     seconds = time.perf_counter() - started
     meta = motion.metadata
     if meta.get("style_notice"):
-        stderr_console.print(f"[yellow]note:[/yellow] {meta['style_notice']}")
+        stderr_console.print(f"[yellow]note:[/yellow] {markup(meta['style_notice'])}", highlight=False)
     write_motions(motion, output, format=settings.format, rig=settings.rig)
     written = [path for path in output if path != "-"]
     if settings.preview and written:
@@ -335,9 +381,9 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
         kept = f", {constraints.describe()}" if constraints else ""
         how = (f"{meta.get('sampler')} {meta.get('steps')} steps, {guidance_summary(meta)}, seed {settings.seed}"
                if meta.get("sampler") else f"K = {meta.get('top_k')}, repertoire {meta.get('repertoire')}")
-        stderr_console.print(
-            f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at {motion.fps:g} fps "
-            f"({settings.generator}, {how}{kept}; {seconds:.1f} s)", highlight=False)
+        done = (f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at "
+                f"{motion.fps:g} fps ({settings.generator}, {how}{kept}; {seconds:.1f} s)")
+        stderr_console.print(markup(done), highlight=False)
     return {"song": str(song), "ok": True, "outputs": written, "seconds_of_dance": round(motion.duration, 3),
             "frames": motion.num_frames, "fps": motion.fps, "genre": meta.get("genre"), "seed": settings.seed,
             "steps": meta.get("steps"), "generation_seconds": round(seconds, 3)}

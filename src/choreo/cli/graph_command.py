@@ -8,9 +8,10 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import (BEAT_LOCK, CHECKPOINT, FOOT_LOCK, OUTPUT, RIG, SONG, SPEED_LIMIT, Settings, dance_one,
-                               load_backend)
+from .generate_command import (BEAT_LOCK, BEATS, BPM, CHECKPOINT, FOOT_LOCK, OUTPUT, RIG, SONG, SPEED_LIMIT, THREADS, Settings,
+                               beat_source, dance_one, load_backend)
 from .progress import progress_bar, stderr_console
+from .text import markup
 
 
 class DanceByDefault(TyperGroup):
@@ -44,7 +45,8 @@ def graph_dance(
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
-    rig: Optional[str] = RIG,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    threads: Optional[int] = THREADS,
 ) -> None:
     """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
 
@@ -59,7 +61,7 @@ def graph_dance(
     if top_k < 1 or (warp_smoothing is not None and warp_smoothing < 0):
         raise ParameterError("--top-k must be at least 1 and --warp-smoothing at least 0")
     settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
-                        speed_limit)
+                        speed_limit, beats=beat_source(bpm, beats), threads=threads)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
                            **({} if warp_smoothing is None else {"warp_smoothing": warp_smoothing}))
     dance_one(backend, song, output, settings)
@@ -109,4 +111,4 @@ def graph_build(
     with progress_bar("describing clips") as update:
         repertoire = build_repertoire_file(sources, output, source, max(1, round(stride * 30)), checkpoint,
                                            SpeedLimits(max_speed, max_root_speed), update)
-    stderr_console.print(f"wrote {output}: {len(repertoire)} clips of 8 s from {source}", highlight=False)
+    stderr_console.print(markup(f"wrote {output}: {len(repertoire)} clips of 8 s from {source}"), highlight=False)

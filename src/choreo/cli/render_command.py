@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from .progress import progress_bar, stderr_console
+from .text import markup
 
 
 def render(
@@ -46,7 +47,7 @@ def render(
         render_html(dance, output, music)
     else:
         render_preview(dance, Path(output), config, music)
-    stderr_console.print(f"wrote {output}", highlight=False)
+    stderr_console.print(f"wrote {markup(output)}", highlight=False)
 
 
 def render_config(size: str, fps: float | None, strip: int):

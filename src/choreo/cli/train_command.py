@@ -32,6 +32,11 @@ def train(
     sigma_data: Optional[float] = typer.Option(None, help="sgmd with --prediction v: the data's standard deviation the skip assumes (default 1)."),
     snr_gamma: Optional[float] = typer.Option(None, help="sgmd: weigh each window's loss by min(SNR, this) (min-SNR; default 0: off)."),
     reconstruction_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the x0 reconstruction loss (default 6.36, 10 x EDGE's 0.636)."),
+    foot_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the foot term, planted feet that move (default 10.942, EDGE's)."),
+    contact_source: Optional[str] = typer.Option(None, help="sgmd: contacts the foot term pins: predicted (the model's own, EDGE; default) or target (the data's)."),
+    stepping_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the feet's world speeds against the data's, in (m/s)^2 (default 0: off)."),
+    leg_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the legs' rotation channels inside the x0 term (default 1: as every channel)."),
+    init_from: Optional[Path] = typer.Option(None, help="sgmd: fine-tune from this training state (same network; its step count carries on)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
@@ -41,6 +46,7 @@ def train(
       choreo train sgmd --data ~/aistpp --config paper --out runs/paper --resume
       choreo train sgmd --data ../shared/data/m2d --out runs/edge --style-mode none --steps 2000
       choreo train sgmd --data ../shared/data/m2d --out runs/plain --stretch 1 --genre-balance 0 --no-rhythm
+      choreo train sgmd --data ../shared/data/m2d --out runs/feet --init-from runs/sgmd/last.pt --contact-source target
       choreo train graph --data ../shared/data/m2d --out runs/graph --steps 1200
     """
     from ..errors import ChoreoError, ParameterError
@@ -55,11 +61,16 @@ def train(
         raise ChoreoError(f"generator {generator!r} cannot be trained yet: {plugin.status}")
     if not data.is_dir():
         raise ParameterError(f"--data {data} is not a folder")
+    if init_from is not None and not init_from.is_file():
+        raise ParameterError(f"--init-from {init_from} is not a file")
 
     given = {"config": config, "steps": steps, "batch_size": batch_size, "prompt": prompt, "style_mode": style_mode,
              "style_init": style_init, "style_dropout": style_dropout, "checkpoint_every": checkpoint_every, "seed": seed,
              "mirror": mirror, "genre_balance": genre_balance, "rhythm": rhythm, "prediction": prediction,
              "sigma_data": sigma_data, "snr_gamma": snr_gamma, "reconstruction_weight": reconstruction_weight,
+             "foot_weight": foot_weight, "contact_source": contact_source, "stepping_weight": stepping_weight,
+             "leg_weight": leg_weight,
+             "init_from": None if init_from is None else str(init_from),
              "stretch": None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18"),
              "turns": None if turns is None else _numbers("--turns", turns, "0,90,180,270")}
     options = parse_options(generator, plugin.train_options, {k: v for k, v in given.items() if v is not None})
@@ -73,7 +84,9 @@ def train(
             path = plugin.train(data, out, options, resume=resume, progress=report)
         except ValueError as error:  # bad configuration names and the like
             raise ParameterError(str(error)) from None
-    stderr_console.print(f"wrote {path}")
+    from .text import markup
+
+    stderr_console.print(f"wrote {markup(path)}")
 
 
 def _numbers(flag: str, text: str, example: str) -> tuple[float, ...]:

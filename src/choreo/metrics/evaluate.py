@@ -11,6 +11,7 @@ import numpy as np
 from .beats import beat_align_score, beat_distances, motion_beats
 from .fid import diversity, frechet_distance, motion_features, normalise_by_reference
 from .pfc import foot_contact_score, PFC_SCALE
+from .stepping import Stepping, pooled, stepping
 
 
 @dataclass
@@ -31,6 +32,7 @@ class DanceScore:
     pfc: float  # this clip's PFC term x 10,000
     motion_to_music: float | None  # ChoreoGraph's mean squared beat distances, frames^2
     music_to_motion: float | None
+    stepping: Stepping  # planted feet, feet against the root, the supporting foot's slide (stepping.py)
 
 
 @dataclass
@@ -51,6 +53,12 @@ class EvaluationReport:
     ground_truth_pfc: float
     motion_to_music: float | None
     music_to_motion: float | None
+    planted_share: float  # stepping (stepping.py): share of frames with a planted foot
+    foot_root_correlation: float  # the faster foot's speed against the root's
+    support_slide: float  # metres the slower foot travels per metre the root travels
+    ground_truth_planted_share: float
+    ground_truth_foot_root_correlation: float
+    ground_truth_support_slide: float
     clips: list[DanceScore] = field(default_factory=list)
     ground_truth_clips: list[DanceScore] = field(default_factory=list)
 
@@ -65,7 +73,7 @@ def score_dance(dance: Dance, fps: float) -> DanceScore:
         align = beat_align_score(dance.music_beats, beats)
         m2m, music2m = beat_distances(dance.music_beats, beats)
     return DanceScore(dance.name, len(dance.positions), len(dance.positions) / fps, align,
-                      foot_contact_score(dance.positions) * PFC_SCALE, m2m, music2m)
+                      foot_contact_score(dance.positions) * PFC_SCALE, m2m, music2m, stepping(dance.positions, fps))
 
 
 def _mean_of(values) -> float | None:
@@ -89,6 +97,7 @@ def evaluate(generated: Sequence[Dance], ground_truth: Sequence[Dance], fps: flo
     gen_g, gt_g = normalise_by_reference(geometric[:n], geometric[n:])
     scores = [score_dance(d, fps) for d in generated]
     truth_scores = [score_dance(d, fps) for d in ground_truth]
+    steps, truth_steps = pooled([s.stepping for s in scores]), pooled([s.stepping for s in truth_scores])
     return EvaluationReport(
         fps=fps, generated_count=n, ground_truth_count=len(ground_truth),
         mean_clip_seconds=float(np.mean([s.seconds for s in scores])) if scores else 0.0,
@@ -100,6 +109,9 @@ def evaluate(generated: Sequence[Dance], ground_truth: Sequence[Dance], fps: flo
         ground_truth_pfc=float(np.nanmean([s.pfc for s in truth_scores])),
         motion_to_music=_mean_of(s.motion_to_music for s in scores),
         music_to_motion=_mean_of(s.music_to_motion for s in scores),
+        planted_share=steps[0], foot_root_correlation=steps[1], support_slide=steps[2],
+        ground_truth_planted_share=truth_steps[0], ground_truth_foot_root_correlation=truth_steps[1],
+        ground_truth_support_slide=truth_steps[2],
         clips=scores, ground_truth_clips=truth_scores,
     )  # fmt: skip
 

@@ -26,7 +26,8 @@ if TYPE_CHECKING:
 
 SCORING_WINDOWS = WindowConfig(seconds=5.0, stride_seconds=2.5, fps=30.0)
 TABLE_HEADER = ("| {label} | clips | BeatAlign | PFC | FID_k | FID_g | Div_k | Div_g | beat dist motion->music | "
-                "music->motion |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+                "music->motion | planted | foot~root | slide |\n"
+                "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
 
 
 def scoring_windows(clips: Sequence[Clip]) -> list:
@@ -139,5 +140,6 @@ def fmt(value) -> str:
 def table_row(label: str, report: EvaluationReport) -> str:
     """One markdown row in TABLE_HEADER's column order."""
     values = (report.beat_align, report.pfc, report.fid_k, report.fid_g, report.div_k, report.div_g,
-              report.motion_to_music, report.music_to_motion)
+              report.motion_to_music, report.music_to_motion, report.planted_share, report.foot_root_correlation,
+              report.support_slide)
     return f"| {label} | {report.generated_count} | " + " | ".join(fmt(v) for v in values) + " |"

@@ -59,7 +59,7 @@ def _decoder_notes_silenced() -> Iterator[None]:
 def _open(path: Path) -> sf.SoundFile:
     try:
         with _decoder_notes_silenced():
-            return sf.SoundFile(str(path))
+            return sf.SoundFile(os.fsencode(path))  # bytes: names that are not valid UTF-8 open too
     except Exception as error:  # libsndfile reports every decoding problem this way
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
         if "does not exist" in reason or "Error opening" in reason:  # libsndfile's words for a bad mp3 or text

@@ -13,6 +13,7 @@ The tempo is chosen in two stages, each on evidence from the whole song:
 Beats are then placed by dynamic programming (Ellis 2007, librosa's beat_track) at that tempo,
 and the grid is moved by half a beat when the percussive part of the music (median-filter
 harmonic/percussive separation of the mel spectrogram) is stronger between the beats than on them.
+A tempo the user gives (``choreo generate --bpm``) replaces the estimate: :func:`beats_at_tempo`.
 """
 
 from __future__ import annotations
@@ -124,13 +125,35 @@ def estimate_beats(envelopes: np.ndarray, fps: float) -> tuple[float, np.ndarray
     tempo = estimate_tempo(full, fps)
     if tempo <= 0:
         return 0.0, np.zeros(0)
-    frames = track_beats(full, fps, tempo).astype(np.float64)
+    return tempo, _beats_on_the_beat(full, percussive, fps, tempo)
+
+
+def beats_at_tempo(envelopes: np.ndarray, fps: float, bpm: float) -> np.ndarray:
+    """Beat times in seconds exactly 60 / ``bpm`` apart (a tempo the user knows), phased onto the
+    song's onsets: the tracker runs at that tempo instead of an estimated one, and the grid goes
+    through its beats (circular mean of their phase), from its first beat to its last. Why a
+    grid and not the tracked beats themselves: a user who gives the tempo wants it kept to the
+    sample, not bent by the tracker towards the onsets it hears."""
+    full, percussive = (np.asarray(e, dtype=np.float64) for e in envelopes)
+    period = 60.0 / bpm
+    tracked = _beats_on_the_beat(full, percussive, fps, bpm) if full.any() else np.zeros(0)
+    if len(tracked) == 0:  # nothing to phase on: the grid starts with the song
+        return np.arange(0.0, len(full) / fps, period)
+    phase = np.angle(np.exp(2j * np.pi * tracked / period).mean()) / (2 * np.pi) * period
+    first, last = np.round((tracked[[0, -1]] - phase) / period).astype(int)
+    grid = phase + np.arange(first, last + 1) * period
+    return grid[(grid >= 0) & (grid <= len(full) / fps)]
+
+
+def _beats_on_the_beat(full: np.ndarray, percussive: np.ndarray, fps: float, bpm: float) -> np.ndarray:
+    """Beat times tracked at ``bpm``, moved by half a beat when the percussion sits between them."""
+    frames = track_beats(full, fps, bpm).astype(np.float64)
     if len(frames) >= 2:
         between = frames + np.append(np.diff(frames), np.median(np.diff(frames))) / 2
         between = between[between < len(full) - 1]
         if _mean_at(percussive, between) > _mean_at(percussive, frames):
             frames = between  # the grid sat on the off-beats
-    return tempo, np.maximum(frames - ENVELOPE_LATENCY, 0) / fps
+    return np.maximum(frames - ENVELOPE_LATENCY, 0) / fps
 
 
 def track_beats(envelope: np.ndarray, fps: float, bpm: float, tightness: float = TIGHTNESS) -> np.ndarray:

@@ -24,7 +24,8 @@ import numpy as np
 from ..errors import AudioError
 from .audio import MIN_DURATION, SILENCE_RMS
 from .chroma import chroma_cens
-from .beats import BEAT_HOP, beat_frames_at, estimate_beats, onset_envelopes, onset_peaks
+from .beat_source import BeatSource
+from .beats import BEAT_HOP, beat_frames_at, onset_envelopes, onset_peaks
 from .spectrum import mel_power, mfcc, onset_strength, power_to_db
 
 FPS = 30
@@ -134,11 +135,12 @@ class _BlockFeaturizer:
 def stream_features(blocks: Iterable[np.ndarray], name: str, sr: int = SAMPLE_RATE, hop_length: int = HOP_LENGTH,
                     config: BlockConfig = BlockConfig(),
                     progress: Callable[[float], None] | None = None,
-                    timbre: bool = True) -> tuple[np.ndarray, float, np.ndarray]:
+                    timbre: bool = True, beats: BeatSource = BeatSource()) -> tuple[np.ndarray, float, np.ndarray]:
     """Featurise a stream of mono blocks at ``sr``.
 
     Returns (features (T, 35) float32, tempo in bpm, beat times in seconds), T = samples // hop_length.
-    ``timbre=False``: MFCC and chroma columns left at zero (frame_features).
+    ``timbre=False``: MFCC and chroma columns left at zero (frame_features). ``beats``: where the
+    beats come from (default: the tracker).
     """
     featurizer = _BlockFeaturizer(config, hop_length, sr, timbre)
     parts: list[np.ndarray] = []
@@ -155,17 +157,18 @@ def stream_features(blocks: Iterable[np.ndarray], name: str, sr: int = SAMPLE_RA
     per_frame = np.concatenate(parts)
     if not np.isfinite(per_frame).all():
         raise AudioError(f"{name} produced invalid features (damaged audio?)")
-    return assemble_features(per_frame, sr / hop_length, featurizer.beat_envelopes(), sr / BEAT_HOP)
+    return assemble_features(per_frame, sr / hop_length, featurizer.beat_envelopes(), sr / BEAT_HOP, beats)
 
 
-def assemble_features(per_frame: np.ndarray, fps: float, envelopes: np.ndarray,
-                      envelope_fps: float) -> tuple[np.ndarray, float, np.ndarray]:
-    """Add the onset-peak and beat one-hot columns to (T, 33) per-frame features.
+def assemble_features(per_frame: np.ndarray, fps: float, envelopes: np.ndarray, envelope_fps: float,
+                      beats: BeatSource = BeatSource()) -> tuple[np.ndarray, float, np.ndarray]:
+    """Add the onset-peak and beat one-hot columns to (T, 33) per-frame features; the beats are
+    the tracker's, or the user's (``beats``): the one place they enter a song's analysis.
 
     Returns (features, tempo in bpm, beat times in seconds, those that fall on one of the T frames).
     """
     onset = per_frame[:, ONSET_COLUMN]
-    tempo, beat_times = estimate_beats(envelopes, envelope_fps)
+    tempo, beat_times = beats.place(envelopes, envelope_fps)
     beat_times = beat_times[beat_frames_at(beat_times, fps, len(per_frame), keep=True)]
     beat_frames = beat_frames_at(beat_times, fps, len(per_frame))
     peak_frames = onset_peaks(onset, fps)

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from .audio import check_usable, iter_audio_blocks
+from .beat_source import BeatSource
 from .beats import BEAT_HOP, onset_envelopes
 from .mel import LogMelStream, fit_length, log_mel as log_mel_of
 from .features import BEAT_COLUMN, FEATURE_DIM, FPS, HOP_LENGTH, SAMPLE_RATE, assemble_features, frame_features, stream_features
@@ -27,13 +28,15 @@ class Music:
         features: (T, 35) float32, T = floor(duration * fps); see choreo.music.features for columns.
         beat_times: (B,) seconds from the start of the excerpt (at the tracker's 96 fps precision;
             the features' beat column marks the nearest 30 fps frames).
-        tempo: estimated global tempo in beats per minute (0 when no beat was found).
+        tempo: global tempo in beats per minute: estimated, or the user's (0 when no beat was found).
         start: seconds into ``path`` at which frame 0 is (an excerpt's start).
         log_mel: (T, 96) log-mel frames (choreo.music.mel), when asked for at analysis
             (``log_mel=True``: the same decode feeds both); None otherwise.
         timbre: whether the features' MFCC and chroma columns were computed (``timbre=False`` at
             analysis leaves them at zero: commands and backends that read only the rhythm and
             the log-mel skip the constant-Q transform).
+        beat_source: where the beats come from (BeatSource.label): "tracked", "bpm N" or the
+            name of the beats file the user gave.
     """
 
     path: Path | None
@@ -45,6 +48,7 @@ class Music:
     start: float = 0.0  # seconds into ``path`` at which frame 0 is
     log_mel: np.ndarray | None = None  # (T, 96), for backends that listen to the spectrum
     timbre: bool = True  # False: MFCC and chroma columns are zeros (analysed for rhythm only)
+    beat_source: str = "tracked"
 
     @property
     def num_frames(self) -> int:
@@ -68,12 +72,13 @@ class Music:
     @classmethod
     def from_file(cls, path: str | os.PathLike, *, start: float | None = None, end: float | None = None,
                   progress: Callable[[float, float], None] | None = None, log_mel: bool = False,
-                  timbre: bool = True) -> "Music":
+                  timbre: bool = True, beats: BeatSource = BeatSource()) -> "Music":
         """Decode and featurise ``path`` (or its [start, end] seconds) in constant memory.
 
         ``progress(done_seconds, total_seconds)`` is called as blocks are processed. ``log_mel``
         also keeps the log-mel spectrogram, from the same decode; ``timbre=False`` skips the MFCC
-        and chroma columns (see the class).
+        and chroma columns (see the class); ``beats``: the tracker's (default) or the user's, in
+        the song's time.
         """
         path = Path(path)
         if start is not None and start < 0:
@@ -90,13 +95,16 @@ class Music:
         mel = LogMelStream() if log_mel else None
         if mel is not None:
             blocks = _also_into(blocks, mel)
-        features, tempo, beat_times = stream_features(blocks, str(path), progress=report, timbre=timbre)
+        features, tempo, beat_times = stream_features(blocks, str(path), progress=report, timbre=timbre,
+                                                      beats=beats.excerpt(start or 0.0, end))
         return cls(path=path, duration=_duration(features), fps=float(FPS), features=features, beat_times=beat_times,
                    tempo=tempo, start=start or 0.0,
-                   log_mel=None if mel is None else fit_length(mel.finish(), len(features)), timbre=timbre)
+                   log_mel=None if mel is None else fit_length(mel.finish(), len(features)), timbre=timbre,
+                   beat_source=beats.label)
 
     @classmethod
-    def from_array(cls, samples: np.ndarray, sr: int, log_mel: bool = False, timbre: bool = True) -> "Music":
+    def from_array(cls, samples: np.ndarray, sr: int, log_mel: bool = False, timbre: bool = True,
+                   beats: BeatSource = BeatSource()) -> "Music":
         """Featurise an in-memory mono signal (tests, synthesised audio); options as in from_file."""
         samples = np.asarray(samples, dtype=np.float32)
         if samples.ndim != 1:
@@ -109,10 +117,11 @@ class Music:
         num_frames = len(samples) // HOP_LENGTH
         per_frame = frame_features(samples, timbre=timbre)[:num_frames]
         envelopes = onset_envelopes(samples, SAMPLE_RATE)[:, : len(samples) // BEAT_HOP]
-        features, tempo, beat_times = assemble_features(per_frame, FPS, envelopes, SAMPLE_RATE / BEAT_HOP)
+        features, tempo, beat_times = assemble_features(per_frame, FPS, envelopes, SAMPLE_RATE / BEAT_HOP, beats)
         return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
                    beat_times=beat_times, tempo=tempo,
-                   log_mel=log_mel_of(samples, len(features)) if log_mel else None, timbre=timbre)
+                   log_mel=log_mel_of(samples, len(features)) if log_mel else None, timbre=timbre,
+                   beat_source=beats.label)
 
 
 def _also_into(blocks: Iterable[np.ndarray], sink) -> Iterator[np.ndarray]:

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
+import stat
 import subprocess
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator
@@ -10,7 +14,8 @@ from typing import Callable, Iterator
 import numpy as np
 from PIL import Image
 
-from ..errors import OutputError, ParameterError
+from ..children import child_process
+from ..errors import InputError, OutputError, ParameterError
 from ..fileio import atomic_path
 from ..motion import Motion
 from .camera import CameraConfig, FollowCamera
@@ -48,30 +53,46 @@ def ffmpeg_executable() -> str:
     return imageio_ffmpeg.get_ffmpeg_exe()
 
 
-def write_video(motion: Motion, path: Path, config: RenderConfig, music: Path | None = None, progress=None) -> None:
+def write_video(motion: Motion, path: Path, config: RenderConfig, music: str | None = None, progress=None) -> None:
+    """Pipe the frames to ffmpeg, with ``music`` (an :func:`ffmpeg_input`) muxed in. ffmpeg's
+    messages go to a file, not a pipe, so neither side can wait on the other; an interrupt kills it."""
     fps = config.fps or motion.fps
     if fps != motion.fps:
         motion = motion.resample(fps)
     width, height = config.width // 2 * 2, config.height // 2 * 2  # H.264 wants even sizes
     config = RenderConfig(width, height, fps, config.strip_frames, config.camera)
-    with atomic_path(path) as temporary:
+    with atomic_path(path) as temporary, tempfile.TemporaryFile() as log:
         command = [ffmpeg_executable(), "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
-                   "-s", f"{width}x{height}", "-r", f"{fps:g}", "-i", "-"]
+                   "-s", f"{width}x{height}", "-r", f"{fps:g}", "-i", "pipe:0"]
         if music is not None:
-            command += ["-i", str(music), "-map", "0:v:0", "-map", "1:a:0", "-c:a", "aac", "-b:a", "160k", "-shortest"]
+            command += ["-i", music, "-map", "0:v:0", "-map", "1:a:0", "-c:a", "aac", "-b:a", "160k", "-shortest"]
         command += ["-c:v", "libx264", "-preset", "veryfast", "-crf", "20", "-pix_fmt", "yuv420p", str(temporary)]
-        encoder = subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
-        try:
-            for image in frames_of(motion, config, progress=progress):
-                encoder.stdin.write(image.tobytes())
-            encoder.stdin.close()
-        except BrokenPipeError:
-            pass
-        finally:
-            error = encoder.stderr.read().decode(errors="replace").strip()
-            code = encoder.wait()
-        if code != 0:
-            raise OutputError(f"ffmpeg could not write {path.name}: {error.splitlines()[-1] if error else code}")
+        with child_process(command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=log) as encoder:
+            with contextlib.suppress(BrokenPipeError):  # ffmpeg stopped early: its exit code and log say why
+                for image in frames_of(motion, config, progress=progress):
+                    encoder.stdin.write(image.tobytes())
+                encoder.stdin.close()
+        if encoder.returncode != 0:
+            raise OutputError(f"ffmpeg could not write {path.name}: {_last_line(log) or encoder.returncode}")
+
+
+def _last_line(log) -> str:
+    log.seek(0)
+    lines = log.read().decode(errors="replace").strip().splitlines()
+    return lines[-1] if lines else ""
+
+
+def ffmpeg_input(path: str | os.PathLike) -> str:
+    """``path`` as ffmpeg must be given it: ``file:`` and an absolute path, so that a name such as
+    ``concat:a.wav|b.wav`` or ``http:/host/x`` is read as the file it names, never as a protocol;
+    and only a regular file, the one choreo checked (a FIFO or a device is refused)."""
+    try:
+        info = os.stat(path)
+    except OSError as error:
+        raise InputError(f"cannot read the music {path}: {error.strerror}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise InputError(f"cannot read the music {path}: it is not a regular file")
+    return "file:" + os.path.abspath(path)
 
 
 def write_gif(motion: Motion, path: Path, config: RenderConfig, progress=None) -> None:
@@ -101,7 +122,7 @@ def render_motion(motion: Motion, path: str | Path, config: RenderConfig = Rende
     if config.width < 16 or config.height < 16:
         raise ParameterError("preview size must be at least 16x16 pixels")
     if suffix in VIDEO_SUFFIXES:
-        write_video(motion, path, config, None if music is None else Path(music), progress)
+        write_video(motion, path, config, None if music is None else ffmpeg_input(music), progress)
     elif suffix == ".gif":
         write_gif(motion, path, config, progress)
     elif suffix == ".png":

@@ -1,0 +1,78 @@
+"""Where a song's beats come from: the tracker, a tempo the user knows, or beat times they give.
+
+Why one value for it: the beats drive the features' beat column (what SGMD reads), the music's
+beat times and tempo, and through them the beat lock. A :class:`BeatSource` goes to the one
+place a song is analysed (``Music.from_file`` / ``from_array``, then
+``choreo.music.features.assemble_features``), so every consumer sees the same beats and no
+backend needs to know where they came from.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+from .beat_file import BeatFile, read_beat_file
+from .beats import beats_at_tempo, estimate_beats
+
+MIN_BPM, MAX_BPM = 20.0, 300.0  # a tempo outside is a typo, not a dance
+
+
+@dataclass(frozen=True, eq=False)
+class BeatSource:
+    """The tracker (neither field set), a tempo in bpm (phase still tracked), or given beats."""
+
+    bpm: float | None = None
+    given: BeatFile | None = None
+
+    @classmethod
+    def from_options(cls, bpm: float | None = None, beats: str | os.PathLike | None = None) -> "BeatSource":
+        """The source for ``--bpm`` / ``--beats`` (both None: the tracker), checked before any work."""
+        if bpm is not None and beats is not None:
+            raise ParameterError("give --bpm or --beats, not both")
+        if bpm is not None:
+            if not (math.isfinite(bpm) and MIN_BPM <= bpm <= MAX_BPM):
+                raise ParameterError(f"--bpm must be {MIN_BPM:g} to {MAX_BPM:g}, got {bpm:g}")
+            return cls(bpm=float(bpm))
+        return cls(given=read_beat_file(beats)) if beats is not None else cls()
+
+    @property
+    def label(self) -> str:
+        """What a dance's metadata records: "tracked", "bpm N" or the beats file's name."""
+        if self.bpm is not None:
+            return f"bpm {self.bpm:g}"
+        return self.given.name if self.given is not None else "tracked"
+
+    def place(self, envelopes: np.ndarray, envelope_fps: float) -> tuple[float, np.ndarray]:
+        """(tempo in bpm, beat times in seconds) for a song whose (2, H) onset envelopes
+        (choreo.music.beats.onset_envelopes) are given; they also say where the song ends."""
+        if self.bpm is not None:
+            return self.bpm, beats_at_tempo(envelopes, envelope_fps, self.bpm)
+        if self.given is None:
+            return estimate_beats(envelopes, envelope_fps)
+        return _tempo_of(self.given.times), self._inside(envelopes.shape[1] / envelope_fps, 1.0 / envelope_fps)
+
+    def excerpt(self, start: float, end: float | None) -> "BeatSource":
+        """The same source for the song's [start, end] seconds: given beats moved to the excerpt's
+        time and cut to it."""
+        if self.given is None or (not start and end is None):
+            return self
+        times = self.given.times
+        keep = (times >= start) & (times <= (end if end is not None else np.inf))
+        downbeats = None if self.given.downbeats is None else self.given.downbeats[keep]
+        return replace(self, given=replace(self.given, times=times[keep] - start, downbeats=downbeats))
+
+    def _inside(self, seconds: float, tolerance: float) -> np.ndarray:
+        times = self.given.times
+        if len(times) and times[-1] > seconds + tolerance:
+            raise InputError(f"{self.given.name}: a beat at {times[-1]:g} s is past the song's end ({seconds:.2f} s)")
+        return times
+
+
+def _tempo_of(times: np.ndarray) -> float:
+    """The tempo given beats keep: 60 / their median spacing (0 for a single beat)."""
+    return float(60.0 / np.median(np.diff(times))) if len(times) >= 2 else 0.0

@@ -1,0 +1,90 @@
+"""How many threads torch samples with: the CPUs this process may use, less those other work keeps busy.
+
+torch's default is one thread per core of the machine. Beside other jobs (``xargs -P``, GNU
+parallel, a CI matrix on one runner) its threads then spin against each other's: two `choreo
+generate` at once on two cores sampled 8 x slower than one alone. So before each dance the
+count is chosen again from what is true now: the CPUs this process may run on (its affinity
+mask and its cgroup's CPU quota) less the tasks other processes have running at this moment
+(the kernel's instantaneous count in /proc/loadavg). ``--threads N`` and ``OMP_NUM_THREADS``
+win over the guess.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from pathlib import Path
+
+LOADAVG = Path("/proc/loadavg")
+CGROUP_V2_MAX = Path("/sys/fs/cgroup/cpu.max")
+CGROUP_V1 = Path("/sys/fs/cgroup/cpu")
+SAMPLES, SAMPLE_INTERVAL = 5, 0.004  # seconds: the runnable count is read a few times, its median kept
+
+
+def allowed_cpus() -> int:
+    """CPUs this process may run on: its affinity mask, capped by its cgroup's CPU quota."""
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    quota = cgroup_cpu_quota()
+    return max(1, min(cpus, math.ceil(quota)) if quota else cpus)
+
+
+def cgroup_cpu_quota() -> float | None:
+    """CPUs' worth of time the cgroup allows (cpu.max, or v1's cfs quota / period); None: no limit."""
+    try:
+        if CGROUP_V2_MAX.exists():
+            quota, period = CGROUP_V2_MAX.read_text().split()[:2]
+        else:
+            quota = (CGROUP_V1 / "cpu.cfs_quota_us").read_text().strip()
+            period = (CGROUP_V1 / "cpu.cfs_period_us").read_text().strip()
+    except (OSError, ValueError):
+        return None
+    if quota in ("max", "-1") or float(period) <= 0:
+        return None
+    return float(quota) / float(period)
+
+
+def busy_elsewhere() -> int:
+    """Tasks of other processes running or waiting for a CPU now (median of a few quick reads)."""
+    counts = []
+    for i in range(SAMPLES):
+        if i:
+            time.sleep(SAMPLE_INTERVAL)
+        try:
+            running = int(LOADAVG.read_text().split()[3].split("/")[0])
+        except (OSError, ValueError, IndexError):
+            return 0
+        counts.append(running - own_running_threads())
+    return max(0, sorted(counts)[len(counts) // 2])
+
+
+def own_running_threads() -> int:
+    """This process's threads in state R (the reading one included)."""
+    running = 0
+    for stat in Path("/proc/self/task").glob("*/stat"):
+        try:
+            running += stat.read_text().rsplit(")", 1)[1].split()[0] == "R"
+        except (OSError, IndexError):
+            continue
+    return max(running, 1)
+
+
+def choose_threads(requested: int | None = None) -> int:
+    """``requested`` (--threads), else OMP_NUM_THREADS, else the idle share of the allowed CPUs."""
+    if requested:
+        return requested
+    given = os.environ.get("OMP_NUM_THREADS", "").strip()
+    if given.isdigit() and int(given) > 0:
+        return int(given)
+    cpus = allowed_cpus()
+    return max(1, min(cpus, cpus - busy_elsewhere()))
+
+
+def use_threads(requested: int | None = None) -> int:
+    """Set torch's intra-op thread count for the work about to start; returns it."""
+    import torch
+
+    threads = choose_threads(requested)
+    if torch.get_num_threads() != threads:
+        torch.set_num_threads(threads)
+    return threads

@@ -1,0 +1,79 @@
+"""The thread policy (choreo.threads): the CPUs a job may use, less what other work keeps busy."""
+
+import os
+
+import pytest
+
+from choreo import threads
+
+
+@pytest.fixture
+def machine(monkeypatch, tmp_path):
+    """A fake machine: its CPU count, cgroup quota and running tasks, set by the test."""
+    state = {"cpus": 8, "cpu.max": "max 100000", "running": 1}
+    monkeypatch.setattr(threads.os, "sched_getaffinity", lambda pid: set(range(state["cpus"])))
+    monkeypatch.setattr(threads, "CGROUP_V2_MAX", tmp_path / "cpu.max")
+    monkeypatch.setattr(threads, "CGROUP_V1", tmp_path / "v1")  # absent
+    monkeypatch.setattr(threads, "LOADAVG", tmp_path / "loadavg")
+    monkeypatch.setattr(threads, "own_running_threads", lambda: 1)
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+
+    def sync():
+        (tmp_path / "cpu.max").write_text(state["cpu.max"] + "\n")
+        (tmp_path / "loadavg").write_text(f"0.50 0.40 0.30 {state['running']}/400 12345\n")
+    state["sync"] = sync
+    sync()
+    return state
+
+
+def test_an_idle_machine_gets_every_allowed_cpu(machine):
+    assert threads.choose_threads() == 8
+
+
+def test_other_running_jobs_take_their_cpus(machine):
+    machine["running"] = 1 + 3  # this thread and three others
+    machine["sync"]()
+    assert threads.choose_threads() == 5
+    machine["running"] = 1 + 20
+    machine["sync"]()
+    assert threads.choose_threads() == 1  # never fewer than one
+
+
+def test_the_cgroup_quota_caps_the_cpus(machine):
+    machine["cpu.max"] = "250000 100000"  # 2.5 CPUs' worth
+    machine["sync"]()
+    assert threads.cgroup_cpu_quota() == 2.5 and threads.allowed_cpus() == 3
+    machine["cpu.max"] = "max 100000"
+    machine["sync"]()
+    assert threads.cgroup_cpu_quota() is None and threads.allowed_cpus() == 8
+
+
+def test_requested_threads_and_omp_num_threads_win(machine, monkeypatch):
+    machine["running"] = 9
+    machine["sync"]()
+    assert threads.choose_threads(3) == 3
+    monkeypatch.setenv("OMP_NUM_THREADS", "6")
+    assert threads.choose_threads() == 6
+    assert threads.choose_threads(2) == 2  # --threads over the environment
+    monkeypatch.setenv("OMP_NUM_THREADS", "lots")
+    assert threads.choose_threads() == 1  # not a number: the policy decides (8 CPUs, 8 busy elsewhere)
+
+
+def test_unreadable_proc_files_fall_back_to_the_allowed_cpus(machine, tmp_path):
+    os.remove(tmp_path / "loadavg")
+    os.remove(tmp_path / "cpu.max")
+    assert threads.busy_elsewhere() == 0 and threads.choose_threads() == 8
+
+
+def test_own_running_threads_counts_this_reader():
+    assert threads.own_running_threads() >= 1
+
+
+def test_use_threads_sets_torch(machine):
+    import torch
+
+    before = torch.get_num_threads()
+    try:
+        assert threads.use_threads(1) == 1 and torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
