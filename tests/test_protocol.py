@@ -84,7 +84,7 @@ def test_finished_scoring_runs_the_beat_lock(clips, monkeypatch):
     import choreo.finishing
 
     finished = []
-    monkeypatch.setattr(choreo.finishing, "finish", lambda motion, beats, foot=False: finished.append(foot) or motion)
+    monkeypatch.setattr(choreo.finishing, "finish", lambda motion, beats, foot=False, footsteps=False: finished.append(foot) or motion)
     scoring = ScoringSet.from_clips(clips)
     score_generator(Replaying(scoring.windows), scoring, finished=True, foot_lock=True)
     assert finished == [True] * len(scoring.windows)

@@ -35,6 +35,7 @@ class Finishing:
     beat_lock: bool = True  # motion beats re-timed onto the music's beats (given frames stay)
     foot_lock: bool = False  # planted feet's drift moved onto the root (halves PFC, doubles FID_g)
     speed_limit: bool = True  # turns and dashes faster than real dancers' spread over neighbouring frames
+    footsteps: bool = False  # feet stand until the body leaves them, then step (legs by IK)
 
 
 _BACKENDS: dict[tuple, "Generator"] = {}
@@ -178,6 +179,6 @@ def dance(
     motion = backend.generate(request, progress=progress)
     frames = None if fixed is None else fixed.fixed_frames()
     finished = finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock,
-                      speed=finishing.speed_limit)
+                      speed=finishing.speed_limit, footsteps=finishing.footsteps)
     finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
     return finished

@@ -38,6 +38,8 @@ BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
                          help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
 FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
                          help="Let planted feet carry the body instead of sliding (halves PFC, doubles FID_g: off by default).")
+FOOTSTEPS = typer.Option(False, "--footsteps/--no-footsteps",
+                         help="Plan steps: each foot stands until the body leaves it, then steps (legs by IK; docs/results.md, \"Feet\").")
 SPEED_LIMIT = typer.Option(True, "--speed-limit/--no-speed-limit",
                            help="Spread turns and dashes faster than real dancers move over the frames around them.")
 BPM = typer.Option(None, "--bpm", help="The song's tempo, if you know it (20-300): beats exactly 60/BPM s apart, "
@@ -62,7 +64,7 @@ def generate(
                                          help="Output format(s): with -o overrides the extension; with --out-dir a list like bvh,npz."),
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
-    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
     rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
     threads: Optional[int] = THREADS,
     shard: Optional[str] = typer.Option(None, "--shard", help="With --out-dir: dance only shard K of N (K/N, 1-based) of the "
@@ -129,7 +131,7 @@ def generate(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
-                        beat_lock, foot_lock, rig=rig, speed_limit=speed_limit, style_guidance=style_guidance,
+                        beat_lock, foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps, style_guidance=style_guidance,
                         beats=beat_source(bpm, beats), threads=threads)
     backend = load_backend(settings)
     summaries, failed = [], 0
@@ -161,7 +163,7 @@ def inbetween(
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
     rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
     threads: Optional[int] = THREADS,
 ) -> None:
@@ -193,7 +195,7 @@ def inbetween(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
-                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit,
+                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
                         beats=beat_source(bpm, beats), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
@@ -206,7 +208,7 @@ def inpaint(
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
     rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
     threads: Optional[int] = THREADS,
 ) -> None:
@@ -233,7 +235,7 @@ def inpaint(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
-                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit,
+                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
                         beats=beat_source(bpm, beats), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
@@ -244,7 +246,7 @@ def trajectory(
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
-    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
     rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
     threads: Optional[int] = THREADS,
 ) -> None:
@@ -262,7 +264,7 @@ def trajectory(
 
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
-                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit,
+                        beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
                         beats=beat_source(bpm, beats), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
@@ -287,6 +289,7 @@ class Settings:
     style_guidance: float | None = None  # None: the backend's default
     beats: BeatSource | None = None  # --bpm or --beats; None: the tracker's beats
     threads: int | None = None  # --threads; None: choreo.threads decides per dance
+    footsteps: bool = False  # finishing: the step planner (choreo.finishing.steps)
 
 
 def beat_source(bpm: float | None, beats: Path | None) -> BeatSource:
@@ -361,22 +364,23 @@ def dance_one(backend, song: Path, output: list[str], settings: Settings, build_
     started = time.perf_counter()
     with progress_bar("dancing", 100) as update:
         motion = dance(music, backend, style=settings.style, seed=settings.seed, options=options, constraints=constraints,
-                       finishing=Finishing(settings.beat_lock, settings.foot_lock, settings.speed_limit),
+                       finishing=Finishing(settings.beat_lock, settings.foot_lock, settings.speed_limit, settings.footsteps),
                        threads=settings.threads,
                        progress=lambda fraction: update(round(fraction * 100), 100))
     seconds = time.perf_counter() - started
     meta = motion.metadata
     if meta.get("style_notice"):
         stderr_console.print(f"[yellow]note:[/yellow] {markup(meta['style_notice'])}", highlight=False)
-    write_motions(motion, output, format=settings.format, rig=settings.rig)
     written = [path for path in output if path != "-"]
-    if settings.preview and written:
+    companions = {}
+    if settings.preview and written:  # the video joins the motions' all or nothing
         from ..render import RenderConfig
         from .render_command import render_preview
 
-        video = Path(written[0]).with_suffix(".mp4")
-        render_preview(motion, video, RenderConfig(), song)
-        written.append(str(video))
+        video = str(Path(written[0]).with_suffix(".mp4"))
+        companions[video] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
+    write_motions(motion, output, format=settings.format, rig=settings.rig, companions=companions)
+    written += list(companions)
     if written:
         kept = f", {constraints.describe()}" if constraints else ""
         how = (f"{meta.get('sampler')} {meta.get('steps')} steps, {guidance_summary(meta)}, seed {settings.seed}"

@@ -8,8 +8,8 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import (BEAT_LOCK, BEATS, BPM, CHECKPOINT, FOOT_LOCK, OUTPUT, RIG, SONG, SPEED_LIMIT, THREADS, Settings,
-                               beat_source, dance_one, load_backend)
+from .generate_command import (BEAT_LOCK, BEATS, BPM, CHECKPOINT, FOOT_LOCK, FOOTSTEPS, OUTPUT, RIG, SONG, SPEED_LIMIT, THREADS,
+                               Settings, beat_source, dance_one, load_backend)
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -44,7 +44,7 @@ def graph_dance(
     seed: int = typer.Option(0, help="0: the paper's deterministic walk; any other seed: another take of the same song."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
-    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT,
+    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
     rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
     threads: Optional[int] = THREADS,
 ) -> None:
@@ -61,7 +61,7 @@ def graph_dance(
     if top_k < 1 or (warp_smoothing is not None and warp_smoothing < 0):
         raise ParameterError("--top-k must be at least 1 and --warp-smoothing at least 0")
     settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
-                        speed_limit, beats=beat_source(bpm, beats), threads=threads)
+                        speed_limit, beats=beat_source(bpm, beats), threads=threads, footsteps=footsteps)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
                            **({} if warp_smoothing is None else {"warp_smoothing": warp_smoothing}))
     dance_one(backend, song, output, settings)

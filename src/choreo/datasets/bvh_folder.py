@@ -19,6 +19,7 @@ from ..errors import DatasetError
 from ..formats.bvh import read_bvh
 from ..music import SUPPORTED_EXTENSIONS
 from .base import Clip, ProgressCallback
+from ..formats import json_arrays
 from .cache import cached_music
 from .clips import align_music_and_motion
 
@@ -27,8 +28,8 @@ def _read_mapping(path: Path) -> dict[str, str]:
     if not path.is_file():
         return {}
     try:
-        mapping = json.loads(path.read_text())
-    except ValueError:
+        mapping = json_arrays.loads(path.read_text())
+    except ValueError:  # malformed, not UTF-8, or nested too deeply
         raise DatasetError(f"{path} is not valid JSON") from None
     if not isinstance(mapping, dict):
         raise DatasetError(f"{path} must map clip names to strings")

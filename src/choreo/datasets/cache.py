@@ -1,7 +1,9 @@
 """On-disk cache of per-song music features, so a dataset is featurised once, not every epoch.
 
-Entries are keyed by the audio file's absolute path, size and modification time, the excerpt
-asked for, and the feature definition version; a changed file or feature set misses the cache.
+Entries are keyed by the audio file's absolute path, size, modification time and a hash of its
+first and last MiB (so a file replaced by ``cp -p``, same size and time, misses too), the excerpt
+asked for, and the feature definition version. An entry is checked on read (the arrays, their
+shapes and dtypes, finite values): a damaged or planted one is recomputed, never trusted.
 """
 
 from __future__ import annotations
@@ -12,8 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import MotionFormatError
 from ..fileio import atomic_output
+from ..formats.safe_arrays import load_npz
 
+MAX_ENTRY_BYTES = 1 << 28  # per array: hours of features; more is not an entry we wrote
 FEATURE_VERSION = 2  # 2: beats tracked on a 96 fps envelope; bump when choreo.music's feature definition changes
 
 
@@ -25,10 +30,53 @@ def cache_dir() -> Path:
     return Path(base) / "choreo"
 
 
+HASHED_BYTES = 1 << 20  # from each end of the file: cheap on any song, and a re-encode changes both
+
+
+def _content_digest(audio_path: Path, size: int) -> str:
+    """SHA-256 of the file's first and last MiB (all of it when smaller)."""
+    digest = hashlib.sha256()
+    with open(audio_path, "rb") as handle:
+        digest.update(handle.read(HASHED_BYTES))
+        if size > HASHED_BYTES:
+            handle.seek(max(HASHED_BYTES, size - HASHED_BYTES))
+            digest.update(handle.read(HASHED_BYTES))
+    return digest.hexdigest()
+
+
 def _cache_key(audio_path: Path, start: float | None, end: float | None) -> str:
     stat = audio_path.stat()
-    text = f"{audio_path.resolve()}|{stat.st_size}|{stat.st_mtime_ns}|{start}|{end}|v{FEATURE_VERSION}"
+    content = _content_digest(audio_path, stat.st_size)
+    text = f"{audio_path.resolve()}|{stat.st_size}|{stat.st_mtime_ns}|{content}|{start}|{end}|v{FEATURE_VERSION}"
     return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _valid_entry(data) -> bool:
+    """Whether a cache entry holds what :func:`cached_music` stores: (T, D) finite float features,
+    finite increasing beat times, a finite tempo, and a finite positive duration and rate."""
+    features, beats = data["features"], data["beat_times"]
+    scalars = [data[key] for key in ("duration", "fps")]
+    return (features.dtype.kind == "f" and features.ndim == 2 and features.size > 0
+            and bool(np.isfinite(features).all())
+            and beats.dtype.kind == "f" and beats.ndim == 1 and bool(np.isfinite(beats).all())
+            and bool(np.all(np.diff(beats) >= 0))
+            and all(s.shape == () and s.dtype.kind in "fi" and np.isfinite(s) and s > 0 for s in scalars)
+            and data["tempo"].shape == () and bool(np.isfinite(data["tempo"])))
+
+
+def _read_entry(entry: Path, audio_path: Path, start: float | None):
+    """The cached Music, or None when the entry is missing, damaged or fails :func:`_valid_entry`."""
+    from ..music import Music
+
+    try:
+        data = load_npz(entry, limit=MAX_ENTRY_BYTES)
+        if not _valid_entry(data):
+            return None
+        return Music(path=audio_path, duration=float(data["duration"]), fps=float(data["fps"]),
+                     features=data["features"], beat_times=data["beat_times"], tempo=float(data["tempo"]),
+                     start=start or 0.0)
+    except (OSError, KeyError, ValueError, MotionFormatError):
+        return None  # recomputed by the caller
 
 
 def cached_music(audio_path: str | os.PathLike, start: float | None = None, end: float | None = None,
@@ -40,14 +88,9 @@ def cached_music(audio_path: str | os.PathLike, start: float | None = None, end:
     if not use_cache:
         return Music.from_file(audio_path, start=start, end=end)
     entry = cache_dir() / "features" / f"{_cache_key(audio_path, start, end)}.npz"
-    if entry.exists():
-        try:
-            with np.load(entry) as data:
-                return Music(path=audio_path, duration=float(data["duration"]), fps=float(data["fps"]),
-                             features=data["features"], beat_times=data["beat_times"], tempo=float(data["tempo"]),
-                             start=start or 0.0)
-        except (OSError, KeyError, ValueError):
-            pass  # a damaged entry is recomputed below
+    music = _read_entry(entry, audio_path, start) if entry.exists() else None
+    if music is not None:
+        return music
     music = Music.from_file(audio_path, start=start, end=end)
     entry.parent.mkdir(parents=True, exist_ok=True)
     with atomic_output(entry) as handle:

@@ -34,6 +34,7 @@ from scipy.ndimage import gaussian_filter1d, percentile_filter
 
 from ..errors import DatasetError, ParameterError
 from ..fileio import atomic_output
+from ..formats import json_arrays
 from ..motion import Motion
 from ..skeleton import JOINT_NAMES, SMPL24, forward_kinematics, quaternion_to_matrix
 from .base import TEST, TRAIN, Clip, ProgressCallback
@@ -122,9 +123,10 @@ def clip_number(name: str) -> int:
     return int(name.split("_")[2])
 
 
-def _read_json(path: Path) -> dict:
+def _read_json(path: Path, arrays_at: tuple[str, ...] = ()) -> dict:
+    """A clip's JSON file as a dict, the members named in ``arrays_at`` read straight into numpy."""
     try:
-        data = json.loads(path.read_text())
+        data = json_arrays.loads(path.read_text(), arrays_at)
     except FileNotFoundError:
         raise DatasetError(f"{path.parent.name}: {path.name} is missing") from None
     except (OSError, ValueError) as error:
@@ -153,7 +155,7 @@ def read_recording(folder: str | Path) -> M2DRecording:
     """Parse one clip folder: metres, world positions (center + skeleton), floor at y = 0."""
     folder = Path(folder)
     genre = genre_of(folder.name)
-    data = _read_json(folder / "skeletons.json")
+    data = _read_json(folder / "skeletons.json", arrays_at=("center", "skeletons"))
     config = _read_json(folder / "config.json")
     try:
         center = np.asarray(data["center"], dtype=np.float64) / 100.0
@@ -161,6 +163,8 @@ def read_recording(folder: str | Path) -> M2DRecording:
         start, end = int(config["start_position"]), int(config["end_position"])
     except (KeyError, ValueError, TypeError):
         raise DatasetError(f"{folder.name}: skeletons.json or config.json lacks expected fields") from None
+    except OverflowError:  # int() of 1e999
+        raise DatasetError(f"{folder.name}: config.json's start_position and end_position must be finite") from None
     shapes_ok = skeleton.ndim == 3 and skeleton.shape[1:] == (23, 3) and center.shape == (len(skeleton), 3)
     if not shapes_ok or len(skeleton) < 10:
         raise DatasetError(f"{folder.name}: expected (N, 23, 3) skeletons and (N, 3) center, got "

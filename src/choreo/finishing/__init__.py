@@ -8,10 +8,11 @@ from ..motion import Motion
 from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
 from .foot_lock import FootLockConfig, foot_lock
 from .speed_limit import SpeedLimitConfig, speed_limit
+from .steps import StepConfig, steps as planted_steps
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | None = None, *,
-           beat: bool = True, foot: bool = False, speed: bool = True) -> Motion:
+           beat: bool = True, foot: bool = False, speed: bool = True, footsteps: bool = False) -> Motion:
     """The passes as `choreo generate` applies them by default: speed limit, beat lock (and, when
     asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
     The speed limit goes first, so that a glitch is not taken for a motion beat, and last, since
@@ -22,10 +23,12 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | No
         motion = beat_lock(motion, music_beat_frames, fixed).motion
     if foot:
         motion = foot_lock(motion, fixed)
-    if speed and (beat or foot):
+    if footsteps:
+        motion = planted_steps(motion, fixed)
+    if speed and (beat or foot or footsteps):
         motion = speed_limit(motion, fixed)
     return motion
 
 
-__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "SpeedLimitConfig", "beat_lock", "finish",
-           "foot_lock", "lock_warp", "speed_limit"]
+__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "SpeedLimitConfig", "StepConfig", "beat_lock", "finish",
+           "foot_lock", "lock_warp", "planted_steps", "speed_limit"]

@@ -16,7 +16,9 @@ order the file lists them. Units are detected from the skeleton's size (see :fun
 from __future__ import annotations
 
 import io
+import itertools
 import re
+import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,8 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MotionFormatError
-from ..motion import Motion
-from ..skeleton import SMPL24, Skeleton, elementary_rotation, euler_to_matrix, matrix_to_euler
+from ..motion import Motion, source_name
+from ..motion.motion import FRAME_CHUNK
+from ..skeleton import (SMPL24, Skeleton, elementary_rotation, euler_to_matrix, matrix_to_euler,
+                        matrix_to_quaternion)
 
 ROTATION_ORDER = "ZXY"
 UNIT_SCALE = {"m": 1.0, "cm": 100.0}
@@ -67,11 +71,23 @@ def write_bvh(motion: Motion, handle, units: str = "m") -> None:
         raise MotionFormatError(f"unknown BVH units {units!r} (use m or cm)")
     if len(motion.skeleton.names) != 24 or motion.skeleton.parents != SMPL24.parents:
         raise MotionFormatError("BVH export supports the SMPL-24 skeleton only")
+    check_joint_names(motion.skeleton.names, "BVH")
     scale = UNIT_SCALE[units]
     text = io.StringIO()
     _write_hierarchy(text, motion.skeleton, scale)
     _write_frames(text, motion, scale)
     handle.write(text.getvalue().encode())
+
+
+def check_joint_names(names, format: str) -> None:
+    """Refuse joint names a file would not keep as one name: BVH splits its hierarchy on
+    whitespace and braces (a name holding a newline and ``MOTION`` forges the frame data), and no
+    format has a use for control or invisible characters. Names come verbatim from input files
+    (JSON), so this is checked on every write rather than trusted."""
+    for name in names:
+        if not name or not name.isprintable() or any(c.isspace() or c in "{}" for c in name):
+            raise MotionFormatError(f"joint name {ascii(name)[:60]} cannot be written to {format}: "
+                                    "names must be non-empty, printable, without spaces or braces")
 
 
 def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float, end_sites: dict | None = None) -> None:
@@ -144,31 +160,62 @@ def parse_bvh(text: str, name: str = "BVH") -> BvhData:
     if not sep:
         raise MotionFormatError(f"{name}: no MOTION section (truncated or not a BVH file)")
     joints = _parse_hierarchy(head, name)
-    frame_count, frame_time, rows, first_row_line = _parse_motion_header(motion_part, name, text.count("\n", 0, len(head)) + 1)
+    frame_count, frame_time, first = _parse_motion_header(motion_part, name)
     num_channels = sum(len(j.channels) for j in joints)
     if num_channels == 0 and frame_count:  # its frame rows would be empty lines: nothing can move
         raise MotionFormatError(f"{name}: no joint has CHANNELS, so its {frame_count} frames hold no motion")
-    if len(rows) < frame_count:
-        raise MotionFormatError(f"{name}: truncated, {len(rows)} of {frame_count} frames present")
-    try:
-        values = np.array([row.split() for row in rows[:frame_count]], dtype=np.float64)
-    except ValueError:
-        for i, row in enumerate(rows[:frame_count]):
-            parts = row.split()
+    rows = _FrameRows(motion_part, first, text.count("\n", 0, len(head)) + 1, name)
+    values = rows.values(frame_count, num_channels)
+    if not np.isfinite(values).all():
+        bad = int(np.argwhere(~np.isfinite(values))[0, 0])
+        raise MotionFormatError(f"{name}: line {rows.line_of(bad)} contains NaN or infinite values")
+    return BvhData(joints, frame_time, values)
+
+
+class _FrameRows:
+    """The non-blank lines after a MOTION header, parsed by numpy in one pass: a Python float or
+    string per value would take many times the motion's size (an hour at 120 fps, gigabytes)."""
+
+    ROW = re.compile(r"^[ \t\r\f\v]*\S[^\n]*", re.MULTILINE)  # anchored: linear on a line of blanks
+
+    def __init__(self, part: str, first: int, line_offset: int, name: str):
+        self.part, self.first, self.line_offset, self.name = part, first, line_offset, name
+
+    def lines(self):
+        return (match for match in self.ROW.finditer(self.part, self.first))
+
+    def line_of(self, row: int) -> int:
+        """The file's line number of frame row ``row`` (1-based, as editors count)."""
+        match = next(itertools.islice(self.lines(), row, None))
+        return self.line_offset + self.part.count("\n", 0, match.start())
+
+    def values(self, frame_count: int, num_channels: int) -> np.ndarray:
+        """(frame_count, num_channels) float64; a short, ragged or non-numeric block is refused."""
+        if frame_count == 0:
+            return np.zeros((0, num_channels))
+        rows = (match.group() for match in itertools.islice(self.lines(), min(frame_count, sys.maxsize)))
+        try:
+            values = np.loadtxt(rows, dtype=np.float64, comments=None, ndmin=2)
+        except ValueError:
+            raise self._first_bad_row(frame_count, num_channels) from None
+        if len(values) < frame_count:
+            raise MotionFormatError(f"{self.name}: truncated, {len(values)} of {frame_count} frames present")
+        if values.shape[1] != num_channels:
+            raise MotionFormatError(f"{self.name}: frames have {values.shape[1]} values, expected {num_channels}")
+        return values
+
+    def _first_bad_row(self, frame_count: int, num_channels: int) -> MotionFormatError:
+        """The one-line error for the first row numpy could not take, found one row at a time."""
+        for match in itertools.islice(self.lines(), min(frame_count, sys.maxsize)):
+            line = self.line_offset + self.part.count("\n", 0, match.start())
+            parts = match.group().split()
             if len(parts) != num_channels:
-                raise MotionFormatError(f"{name}: line {first_row_line + i} has {len(parts)} values, expected {num_channels}") from None
+                return MotionFormatError(f"{self.name}: line {line} has {len(parts)} values, expected {num_channels}")
             try:
                 [float(p) for p in parts]
             except ValueError:
-                raise MotionFormatError(f"{name}: line {first_row_line + i} has a non-numeric value") from None
-        raise MotionFormatError(f"{name}: malformed frame data") from None
-    if frame_count and values.shape != (frame_count, num_channels):
-        raise MotionFormatError(f"{name}: frames have {values.shape[-1]} values, expected {num_channels}")
-    values = values.reshape(frame_count, num_channels)
-    if not np.isfinite(values).all():
-        bad = int(np.argwhere(~np.isfinite(values))[0, 0])
-        raise MotionFormatError(f"{name}: line {first_row_line + bad} contains NaN or infinite values")
-    return BvhData(joints, frame_time, values)
+                return MotionFormatError(f"{self.name}: line {line} has a non-numeric value")
+        return MotionFormatError(f"{self.name}: malformed frame data")
 
 
 def _parse_hierarchy(head: str, name: str) -> list[BvhJoint]:
@@ -247,13 +294,13 @@ def _parse_hierarchy(head: str, name: str) -> list[BvhJoint]:
     return joints
 
 
-def _parse_motion_header(part: str, name: str, line_offset: int) -> tuple[int, float, list[str], int]:
-    lines = part.split("\n")
-    header = [(k, line) for k, line in enumerate(lines) if line.strip()]
+def _parse_motion_header(part: str, name: str) -> tuple[int, float, int]:
+    """Frames, frame time and where the frame rows start in ``part`` (the text after MOTION)."""
+    header = [match for match, _ in zip(_FrameRows.ROW.finditer(part), range(2))]
     if len(header) < 2:
         raise MotionFormatError(f"{name}: MOTION section is truncated")
-    frames_match = re.match(r"\s*Frames:\s*(\d+)\s*$", header[0][1])
-    time_match = re.match(r"\s*Frame\s+Time:\s*([0-9.eE+-]+)\s*$", header[1][1])
+    frames_match = re.match(r"\s*Frames:\s*(\d+)\s*$", header[0].group())
+    time_match = re.match(r"\s*Frame\s+Time:\s*([0-9.eE+-]+)\s*$", header[1].group())
     if not frames_match or not time_match:
         raise MotionFormatError(f"{name}: MOTION section lacks 'Frames:' and 'Frame Time:' lines")
     try:
@@ -262,9 +309,7 @@ def _parse_motion_header(part: str, name: str, line_offset: int) -> tuple[int, f
         raise MotionFormatError(f"{name}: bad Frame Time {time_match.group(1)[:40]!r}") from None
     if not np.isfinite(frame_time) or not 1e-3 <= frame_time <= 1.0:  # 1 to 1000 fps, as a Motion allows
         raise MotionFormatError(f"{name}: Frame Time {time_match.group(1)} is not between 0.001 and 1 s")
-    first = header[1][0] + 1
-    rows = [line for line in lines[first:] if line.strip()]
-    return int(frames_match.group(1)), frame_time, rows, line_offset + first
+    return int(frames_match.group(1)), frame_time, header[1].end()
 
 
 # -- mapping onto SMPL-24 --------------------------------------------------------------------
@@ -294,7 +339,7 @@ def detect_scale(rest_positions: np.ndarray) -> float:
     return 1.0
 
 
-def _local_rotations(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
+def _local_rotations(data: BvhData, warn: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """(T, J, 3, 3) local rotations and (T, 3) root positions in file units."""
     frames = len(data.values)
     rotmats = np.broadcast_to(np.eye(3), (frames, len(data.joints), 3, 3)).copy()
@@ -316,9 +361,22 @@ def _local_rotations(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
                     root[:, axis_index] = values[:, position_channels[axis]] + joint.offset[axis_index]
         elif position_channels:
             ignored_positions = True
-    if ignored_positions:
+    if ignored_positions and warn:
         warnings.warn("BVH position channels on non-root joints are ignored (bone offsets are used)")
     return rotmats, root
+
+
+def _local_quaternions(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
+    """(T, J, 4) local rotations and (T, 3) root positions in file units, converted a block of
+    frames at a time: the matrices and their intermediates for an hour at 120 fps would take
+    gigabytes, the quaternions a few hundred megabytes."""
+    frames = len(data.values)
+    quaternions, root = np.empty((frames, len(data.joints), 4)), np.empty((frames, 3))
+    for start in range(0, frames, FRAME_CHUNK):
+        block = slice(start, start + FRAME_CHUNK)
+        rotmats, root[block] = _local_rotations(BvhData(data.joints, data.frame_time, data.values[block]), start == 0)
+        quaternions[block] = matrix_to_quaternion(rotmats)
+    return quaternions, root
 
 
 def bvh_to_motion(data: BvhData, name: str = "BVH", units: str = "auto") -> Motion:
@@ -337,11 +395,12 @@ def bvh_to_motion(data: BvhData, name: str = "BVH", units: str = "auto") -> Moti
     for j in range(24):
         if file_parents[j] != SMPL24.parents[to_smpl[j]]:
             raise MotionFormatError(f"{name}: joint {data.joints[j].name} has the wrong parent for SMPL-24")
-    rotmats_file, root = _local_rotations(data)
+    quaternions_file, root = _local_quaternions(data)
     offsets = np.zeros((24, 3))
-    rotmats = np.zeros_like(rotmats_file)
+    quaternions = np.empty_like(quaternions_file)
     offsets[to_smpl] = np.array([j.offset for j in data.joints])
-    rotmats[:, to_smpl] = rotmats_file
+    quaternions[:, to_smpl] = quaternions_file
+    del quaternions_file
     skeleton = SMPL24.with_offsets(offsets)
     scale = detect_scale(skeleton.rest_positions()) if units == "auto" else 1.0 / UNIT_SCALE[units]
     skeleton = SMPL24.with_offsets(offsets * scale)
@@ -349,8 +408,7 @@ def bvh_to_motion(data: BvhData, name: str = "BVH", units: str = "auto") -> Moti
     fps = round(fps) if abs(fps - round(fps)) < 1e-3 else fps
     if len(data.values) == 0:
         raise MotionFormatError(f"{name}: no frames")
-    return Motion.from_rotation_matrices(root * scale, rotmats, fps=float(fps), skeleton=skeleton,
-                                         metadata={"source": name})
+    return Motion(root * scale, quaternions, fps=float(fps), skeleton=skeleton, metadata={"source": source_name(name)})
 
 
 def read_bvh(path: str | Path, units: str = "auto") -> Motion:

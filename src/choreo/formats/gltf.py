@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
-from ..motion import Motion
+from ..motion import Motion, source_name
 from ..skeleton import SMPL24
-from .bvh import END_SITES
+from .bvh import END_SITES, check_joint_names
 
 BODY_SIDES = 8  # a spindle's cross-section: enough to read as a limb, few enough to stay small
 BONE_RADIUS = 0.035  # metres at a bone's thickest point; thin bones (hands, feet) get less
@@ -45,6 +45,7 @@ def write_glb(motion: Motion, handle) -> None:
     """Write ``motion`` (SMPL-24 topology) as a binary glTF to a binary handle."""
     if len(motion.skeleton.names) != 24 or motion.skeleton.parents != SMPL24.parents:
         raise MotionFormatError("glTF export supports the SMPL-24 skeleton only")
+    check_joint_names(motion.skeleton.names, "glTF")
     gl = _gltf()
     buffer = _BufferBuilder(gl)
     skeleton = motion.skeleton
@@ -191,14 +192,43 @@ def _animation(gl, buffer: _BufferBuilder, motion: Motion):
 def _accessor_array(gl, document, index: int) -> np.ndarray:
     """An accessor's values as float64 (count, components): tightly packed float or ubyte data only."""
     accessor = document.accessors[index]
+    if accessor.sparse is not None:  # its values would replace some of the view's: read without, silently wrong
+        raise MotionFormatError("sparse glb accessors are not supported by choreo's reader")
     view = document.bufferViews[accessor.bufferView]
     width = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}.get(accessor.type)
     dtype = {gl.FLOAT: np.float32, gl.UNSIGNED_BYTE: np.uint8}.get(accessor.componentType)
     if width is None or dtype is None or (view.byteStride or 0) not in (0, width * np.dtype(dtype).itemsize):
         raise MotionFormatError("glTF accessor layout not supported by choreo's reader")
-    start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
-    data = np.frombuffer(document.binary_blob(), dtype=dtype, count=accessor.count * width, offset=start)
+    start = _byte_count(view.byteOffset) + _byte_count(accessor.byteOffset)
+    size = _byte_count(accessor.count) * width * np.dtype(dtype).itemsize
+    blob = document.binary_blob()
+    if start + size > min(len(blob), _byte_count(view.byteOffset) + _byte_count(view.byteLength)):
+        raise MotionFormatError(f"glb accessor {index} reaches past its buffer view or the binary chunk")
+    data = np.frombuffer(blob, dtype=dtype, count=accessor.count * width, offset=start)
     return data.reshape(accessor.count, width).astype(np.float64)
+
+
+def _byte_count(value) -> int:
+    """A count, offset or length from the JSON chunk: absent is 0; anything but a plain
+    non-negative integer (2^64, -1, 1.5, text) is damage, refused before numpy sees it."""
+    if value is None:
+        return 0
+    if type(value) is not int or value < 0:
+        raise MotionFormatError(f"glb count or offset {str(value)[:40]} is not a byte count")
+    return value
+
+
+def _cached_accessors(gl, document):
+    """:func:`_accessor_array` converting each accessor once per read: a file may point any number
+    of channels at one accessor (100,000 on one would otherwise convert it 100,000 times)."""
+    arrays: dict = {}
+
+    def accessor_array(index: int) -> np.ndarray:
+        if index not in arrays:
+            arrays[index] = _accessor_array(gl, document, index)
+        return arrays[index]
+
+    return accessor_array
 
 
 def read_glb(path: str | Path) -> Motion:
@@ -210,7 +240,7 @@ def read_glb(path: str | Path) -> Motion:
         raise MotionFormatError(f"{path}: not a readable glb ({error})") from None
     try:
         return _motion_of(gl, document, path)
-    except (IndexError, KeyError, TypeError, ValueError, AttributeError) as error:  # indices and sizes a damaged file got wrong
+    except (IndexError, KeyError, TypeError, ValueError, AttributeError, OverflowError) as error:  # indices and sizes a damaged file got wrong
         raise MotionFormatError(f"{path}: damaged glb ({type(error).__name__}: {str(error)[:100]})") from None
     except ParameterError as error:  # values a motion cannot have (a key spacing outside 1-1000 fps)
         raise MotionFormatError(f"{path}: {error}") from None
@@ -228,13 +258,14 @@ def _motion_of(gl, document, path) -> Motion:
     offsets = np.array([document.nodes[n].translation or [0.0, 0.0, 0.0] for n in node_of], dtype=np.float64)
     offsets[0] = 0.0
     animation = document.animations[0]
+    accessor_array = _cached_accessors(gl, document)
     times, rotations, root = None, {}, None
     for channel in animation.channels:
         sampler = animation.samplers[channel.sampler]
-        times = _accessor_array(gl, document, sampler.input)[:, 0] if times is None else times
-        values = _accessor_array(gl, document, sampler.output)
+        times = accessor_array(sampler.input)[:, 0] if times is None else times
+        values = accessor_array(sampler.output)
         if channel.target.path == "rotation" and channel.target.node in node_of:
-            rotations[node_of.index(channel.target.node)] = values[:, [3, 0, 1, 2]]  # back to (w, x, y, z)
+            rotations[node_of.index(channel.target.node)] = values
         elif channel.target.path == "translation" and channel.target.node == node_of[0]:
             root = values
     if times is None or len(times) == 0:
@@ -245,7 +276,7 @@ def _motion_of(gl, document, path) -> Motion:
     for j, values in rotations.items():
         if len(values) != frames:
             raise MotionFormatError(f"{path}: joint {SMPL24.names[j]} is not keyed at every frame")
-        quaternions[:, j] = values
+        quaternions[:, j] = values[:, [3, 0, 1, 2]]  # glTF's (x, y, z, w) back to (w, x, y, z)
     if root is None or len(root) != frames:
         root = np.tile(document.nodes[node_of[0]].translation or [0.0, 0.0, 0.0], (frames, 1))
     extras = document.extras if isinstance(document.extras, dict) else {}
@@ -257,4 +288,4 @@ def _motion_of(gl, document, path) -> Motion:
             fps = float(stored)  # exact, where the float32 key times are not
     else:  # one key says nothing about the rate: ours is in the extras
         fps = float(stored) if stored is not None else 30.0
-    return Motion(root, quaternions, fps=fps, skeleton=SMPL24.with_offsets(offsets), metadata={"source": str(path)})
+    return Motion(root, quaternions, fps=fps, skeleton=SMPL24.with_offsets(offsets), metadata={"source": source_name(path)})

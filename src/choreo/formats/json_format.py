@@ -12,10 +12,12 @@ import json
 import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
-from ..motion import Motion
+from ..motion import Motion, source_name
 from ..skeleton import SMPL24, Skeleton
+from . import json_arrays
 
 FORMAT_NAME, VERSION = "choreo-motion", 1
+BULK_ARRAYS = ("root_positions", "rotations", "joint_positions")  # read straight into numpy
 
 
 def write_json(motion: Motion, handle) -> None:
@@ -31,10 +33,17 @@ def write_json(motion: Motion, handle) -> None:
     handle.write(json.dumps(document, default=str).encode())
 
 
+def _metadata(document: dict, path) -> dict:
+    """The file's metadata, its source reduced to a file name (older files hold absolute paths)."""
+    metadata = dict(document.get("metadata") or {})
+    metadata["source"] = source_name(str(metadata.get("source") or path))
+    return metadata
+
+
 def read_json(path) -> Motion:
     try:
         with open(path, encoding="utf-8") as handle:
-            document = json.load(handle)
+            document = json_arrays.loads(handle.read(), arrays_at=BULK_ARRAYS)
         if document.get("format") != FORMAT_NAME:
             raise MotionFormatError(f"{path}: not a choreo motion JSON (format field missing)")
         skeleton = Skeleton(tuple(document["joint_names"]), tuple(document["parents"]), np.array(document["offsets"]))
@@ -43,7 +52,7 @@ def read_json(path) -> Motion:
         return Motion.from_axis_angle(np.array(document["root_positions"], dtype=np.float64),
                                       np.array(document["rotations"], dtype=np.float64),
                                       fps=float(document["fps"]), skeleton=skeleton,
-                                      metadata=dict(document.get("metadata") or {}))
+                                      metadata=_metadata(document, path))
     except MotionFormatError:
         raise
     except (OSError, ValueError, KeyError, TypeError, AttributeError, OverflowError) as error:

@@ -13,7 +13,7 @@ import json
 import numpy as np
 
 from ..errors import MotionFormatError
-from ..motion import Motion
+from ..motion import Motion, source_name
 from ..skeleton import SMPL24
 from .safe_arrays import load_npz
 from .smpl_params import first_number, motion_to_smpl_params, smpl_params_to_motion
@@ -47,7 +47,7 @@ def read_npz(path) -> Motion:
         try:
             metadata = json.loads(str(data["metadata"]))
             if isinstance(metadata, dict):
-                motion.metadata = {**metadata, "source": str(path)}
+                motion.metadata = {**metadata, "source": source_name(path)}
         except (ValueError, RecursionError):  # metadata is optional: unreadable JSON is ignored
             pass
     return motion

@@ -13,7 +13,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from ..errors import InputError, MotionFormatError, OutputError, ParameterError
-from ..fileio import STDOUT, atomic_output
+from ..fileio import STDOUT, atomic_output, atomic_path
 from ..motion import Motion
 from .aistpp import read_aistpp_pkl, write_aistpp_pkl
 from .bvh import read_bvh, write_bvh
@@ -188,15 +188,20 @@ def _writer(chosen: MotionFormat, rig: str | None) -> Callable[[Motion, object],
     return lambda motion, handle: write(motion, handle, rig=target)
 
 
-def write_motions(motion: Motion, paths: list[str], format: str | None = None, rig: str | None = None) -> list[str]:
+def write_motions(motion: Motion, paths: list[str], format: str | None = None, rig: str | None = None,
+                  companions: dict[str, Callable[[Path], None]] | None = None) -> list[str]:
     """Write ``motion`` to every path, all or none: each file is written in full to a temporary
-    beside it, and only when every one is written are they moved into place."""
+    beside it, and only when every one is written are they moved into place. ``companions`` maps
+    more outputs (a preview video) to a function that writes one to the temporary path it is
+    given: they join the all or none."""
     for path in paths:
         check_output_format(path, format, rig)
     with contextlib.ExitStack() as stack:
         for path in paths:
             handle = stack.enter_context(atomic_output(path))
             _writer(_format_for(path, format, OutputError), rig)(motion, handle)
+        for path, write in (companions or {}).items():
+            write(stack.enter_context(atomic_path(path)))
     return [str(p) for p in paths]
 
 

@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
-from ..motion import Motion
+from ..motion import Motion, source_name
 from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion
 from .bvh import (END_SITES, UNIT_SCALE, _local_rotations, _write_frames, _write_hierarchy, detect_scale,
                   read_bvh_raw)
@@ -355,4 +355,4 @@ def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto
     fps = 1.0 / data.frame_time
     fps = round(fps) if abs(fps - round(fps)) < 1e-3 else fps
     return Motion.from_rotation_matrices(root, smpl_local, fps=float(fps), skeleton=SMPL24.with_offsets(smpl_offsets),
-                                         metadata={"source": str(path), "rig": rig.name})
+                                         metadata={"source": source_name(path), "rig": rig.name})

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MotionFormatError
-from ..motion import Motion
+from ..motion import Motion, source_name
 from ..skeleton import SMPL24
 
 
@@ -49,7 +49,7 @@ def smpl_params_to_motion(poses, trans, scaling, fps: float, name: str) -> Motio
     if not (np.isfinite(fps) and fps > 0):
         raise MotionFormatError(f"{name}: bad frame rate {fps}")
     return Motion.from_axis_angle(trans / scaling, poses.reshape(-1, 24, 3), fps=float(fps), skeleton=SMPL24,
-                                  metadata={"source": name})
+                                  metadata={"source": source_name(name)})
 
 
 def motion_to_smpl_params(motion: Motion, scaling: float = 1.0) -> dict[str, np.ndarray]:

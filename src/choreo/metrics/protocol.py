@@ -39,14 +39,14 @@ def music_beats(features: np.ndarray) -> np.ndarray:
     return np.flatnonzero(features[:, BEAT_COLUMN] > 0.5)
 
 
-def window_dance(window, motion, finished: bool = False, foot_lock: bool = False) -> Dance:
+def window_dance(window, motion, finished: bool = False, foot_lock: bool = False, footsteps: bool = False) -> Dance:
     """A generated ``motion`` for a scoring window as a Dance, optionally after the finishing passes
     (the beat lock, and the foot lock when asked)."""
     beats = music_beats(window.features)
     if finished:
         from ..finishing import finish
 
-        motion = finish(motion, beats, foot=foot_lock)
+        motion = finish(motion, beats, foot=foot_lock, footsteps=footsteps)
     return Dance(f"{window.clip}@{window.start_frame}", motion.joint_positions(), beats)
 
 
@@ -116,13 +116,13 @@ def generate_window_motions(generator: "Generator", windows: Sequence, *, with_s
 
 def score_generator(generator: "Generator", scoring: ScoringSet, *, with_style: bool = True, seed: int = 0,
                     options: dict[str, Any] | None = None, finished: bool = False,
-                    foot_lock: bool = False) -> tuple[EvaluationReport, list[Dance]]:
+                    foot_lock: bool = False, footsteps: bool = False) -> tuple[EvaluationReport, list[Dance]]:
     """Score a backend the way every quality table here is scored: its dances for the test windows
     (after the beat lock, and the foot lock, when asked) against the reference dances."""
     log_mels = scoring.log_mels() if generator.listens_to_spectrum else None
     motions = generate_window_motions(generator, scoring.windows, with_style=with_style, seed=seed, options=options,
                                       log_mels=log_mels)
-    dances = [window_dance(w, m, finished, foot_lock) for w, m in zip(scoring.windows, motions)]
+    dances = [window_dance(w, m, finished, foot_lock, footsteps) for w, m in zip(scoring.windows, motions)]
     return score(dances, scoring.reference), dances
 
 

@@ -6,6 +6,7 @@ positions are derived by forward kinematics, never stored, so a motion cannot di
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field, replace
 from typing import Sequence
 
@@ -20,6 +21,13 @@ MIN_FPS, MAX_FPS = 1.0, 1000.0  # outside these, a frame rate is a damaged file,
 MAX_COORDINATE = 1e5  # metres: 100 km from the origin is a damaged file, and formats lose precision beyond
 MAX_BONE = 1e3  # metres: a rest offset past this is a damaged file (and BVH's unit guess would overflow on it)
 FRAME_CHUNK = 4096  # frames converted at once where a whole song's intermediates would be large
+
+
+def source_name(path: str | os.PathLike) -> str:
+    """What ``metadata["source"]`` holds for a motion read from ``path``: the file's name alone.
+    Writers carry the metadata into every output (JSON, glb, the preview's title), and an absolute
+    path would tell whoever receives one where the input lived (a home folder, a user name)."""
+    return os.path.basename(os.fspath(path))
 
 
 @dataclass(eq=False)

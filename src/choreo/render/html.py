@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import html
 import json
+import re
 from pathlib import Path
 from typing import Sequence
 
@@ -35,13 +36,27 @@ def write_html_preview(motion: Motion, audio_path: str | Path | None, beat_times
     to a binary handle."""
     if motion.num_frames == 0:
         raise MotionFormatError("cannot preview a motion without frames")
-    page = PAGE.replace("__TITLE__", html.escape(str(motion.metadata.get("source", "choreo dance"))))
-    page = page.replace("__THREE_LICENSE__", (VENDOR / "LICENSE").read_text().replace("-->", "- ->"))
-    page = page.replace("__THREE_VERSION__", THREE_VERSION)
-    page = page.replace("__THREE_B64__", _base64((VENDOR / "three.module.min.js").read_bytes()))
-    page = page.replace("__AUDIO__", _audio_element(audio_path))
-    page = page.replace("__DANCE_JSON__", _dance_json(motion, beat_times).replace("</", "<\\/"))
+    fields = {
+        "TITLE": html.escape(str(motion.metadata.get("source", "choreo dance"))),
+        "THREE_LICENSE": (VENDOR / "LICENSE").read_text().replace("-->", "- ->"),
+        "THREE_VERSION": THREE_VERSION,
+        "THREE_B64": _base64((VENDOR / "three.module.min.js").read_bytes()),
+        "AUDIO": _audio_element(audio_path),
+        "DANCE_JSON": _script_safe(_dance_json(motion, beat_times)),
+    }
+    # one pass: a placeholder inside a value (a title holding __AUDIO__) is text, not expanded
+    page = PLACEHOLDER.sub(lambda match: fields[match.group(1)], PAGE)
     handle.write(page.encode("utf-8"))
+
+
+PLACEHOLDER = re.compile(r"__(TITLE|THREE_LICENSE|THREE_VERSION|THREE_B64|AUDIO|DANCE_JSON)__")
+
+
+def _script_safe(text: str) -> str:
+    """JSON made inert inside a <script> element: with no <, > or & left (JSON's own \\u escapes
+    stand in, which JSON.parse reads back), no joint name can close the element or open an HTML
+    comment (``<!--<script>`` makes the parser swallow the rest of the page)."""
+    return text.replace("&", "\\u0026").replace("<", "\\u003c").replace(">", "\\u003e")
 
 
 def _base64(data: bytes) -> str:

@@ -1,0 +1,133 @@
+"""Steps: each foot stands until the body has moved away from it, then steps to where the dance
+puts it, as procedural foot placement in games does.
+
+Generated dancers glide: their ankles travel with the root instead of alternating between
+standing and swinging (docs/results.md, "Feet"). Neither backend can learn the timing of steps from
+M2D (its motion is not aligned with its music), and a pin on the frames where a foot happens to be
+slow cannot invent the steps that are missing. So the steps are planned here, from the dance
+itself: a foot stays where it landed until the place the dance wants it is ``trigger`` metres
+away, then it swings there in ``swing_seconds`` (one foot at a time, the one left furthest
+behind first) and lands where the dance has it at the end of the swing. The legs reach the
+planned ankle positions by two-bone IK (hip and knee), each foot keeping the orientation the dance
+gave it; the root and the upper body are not touched. Frames a user fixed are left as they are,
+the correction fading in and out over ``blend_seconds`` around them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..motion import Motion
+from ..skeleton import SMPL24
+from ..skeleton import rotations as rot
+from ..skeleton.kinematics import global_rotations
+
+LEGS = ((1, 4, 7), (2, 5, 8))  # (hip, knee, ankle) of the left and the right leg in SMPL-24
+HORIZONTAL = np.array([1.0, 0.0, 1.0])  # Y is up
+
+
+@dataclass(frozen=True)
+class StepConfig:
+    trigger: float = 0.12  # metres: a standing foot this far (horizontally) from where the dance wants it steps
+    swing_seconds: float = 0.3  # how long a step takes in the air
+    lift: float = 0.04  # metres the ankle rises at the middle of a step
+    blend_seconds: float = 0.3  # fade of the correction next to frames a user fixed
+
+    def __post_init__(self):
+        if self.trigger <= 0 or self.swing_seconds <= 0 or self.lift < 0 or self.blend_seconds <= 0:
+            raise ParameterError("steps: trigger, swing and blend must be positive, lift >= 0")
+
+
+def plan_steps(wanted: np.ndarray, fps: float, config: StepConfig = StepConfig()) -> np.ndarray:
+    """(T, 2, 3) ankle positions that step: ``wanted`` (T, 2, 3), where the dance puts the left
+    and right ankle, followed by feet that stand still between steps."""
+    frames = len(wanted)
+    swing = max(2, round(config.swing_seconds * fps))
+    planned = np.empty_like(wanted)
+    anchors = wanted[0].copy()
+    stepping = None  # (foot, first frame, landing frame, from, to)
+    for t in range(frames):
+        if stepping is None:
+            drift = np.linalg.norm((wanted[t] - anchors) * HORIZONTAL, axis=-1)
+            foot = int(np.argmax(drift))
+            if drift[foot] > config.trigger:
+                land = min(t + swing, frames - 1)
+                stepping = (foot, t, land, anchors[foot].copy(), wanted[land, foot].copy())
+        planned[t] = anchors
+        if stepping is not None:
+            foot, first, land, start, end = stepping
+            s = (t - first) / max(land - first, 1)
+            ease = s * s * (3 - 2 * s)  # smoothstep: the foot leaves and lands at rest
+            planned[t, foot] = start + (end - start) * ease + [0.0, config.lift * np.sin(np.pi * s), 0.0]
+            if t >= land:
+                anchors[foot], stepping = end, None
+    return planned
+
+
+def fixed_weights(fixed: np.ndarray, fps: float, blend_seconds: float) -> np.ndarray:
+    """(T,) 1 away from fixed frames, 0 on them, a linear ramp over ``blend_seconds`` between."""
+    if not fixed.any():
+        return np.ones(len(fixed))
+    frames = np.arange(len(fixed))
+    distance = np.abs(frames[:, None] - np.flatnonzero(fixed)[None]).min(axis=1)
+    return np.clip(distance / max(blend_seconds * fps, 1.0), 0.0, 1.0)
+
+
+def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) shortest rotations taking directions ``a`` onto ``b`` (N, 3)."""
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    axis = np.cross(a, b)
+    sin = np.linalg.norm(axis, axis=-1, keepdims=True)
+    angle = np.arctan2(sin[:, 0], (a * b).sum(-1))
+    axis = np.where(sin > 1e-9, axis / np.maximum(sin, 1e-12), [1.0, 0.0, 0.0])
+    return rot.axis_angle_to_matrix(axis * angle[:, None])
+
+
+def two_bone_ik(globals_: np.ndarray, positions: np.ndarray, leg: tuple[int, int, int],
+                targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """New world rotations (T, 3, 3) of the hip and the knee that put the ankle at ``targets``
+    (as near as the leg reaches): the knee bends in its own plane to the right hip-ankle distance,
+    then the hip turns the leg onto the target."""
+    hip, knee, ankle = leg
+    h, k, a = positions[:, hip], positions[:, knee], positions[:, ankle]
+    upper, lower = np.linalg.norm(k - h, axis=-1), np.linalg.norm(a - k, axis=-1)
+    reach = np.clip(np.linalg.norm(targets - h, axis=-1), np.abs(upper - lower) + 1e-4, upper + lower - 1e-4)
+    wanted_angle = np.arccos(np.clip((upper**2 + lower**2 - reach**2) / (2 * upper * lower), -1.0, 1.0))
+    current_angle = np.arccos(np.clip(((h - k) * (a - k)).sum(-1) / (upper * lower), -1.0, 1.0))
+    normal = np.cross(h - k, a - k)
+    size = np.linalg.norm(normal, axis=-1, keepdims=True)
+    lateral = globals_[:, knee, :, 0]  # a straight leg has no plane: bend about the knee's own x axis
+    normal = np.where(size > 1e-6, normal / np.maximum(size, 1e-12), lateral)
+    bend = rot.axis_angle_to_matrix(normal * (wanted_angle - current_angle)[:, None])  # opens the angle at the knee
+    knee_world = bend @ globals_[:, knee]
+    bent_ankle = k + np.einsum("tij,tj->ti", bend, a - k)
+    turn = rotation_between(bent_ankle - h, targets - h)
+    return turn @ globals_[:, hip], turn @ knee_world
+
+
+def steps(motion: Motion, fixed: np.ndarray | None = None, config: StepConfig = StepConfig()) -> Motion:
+    """The dance with feet that stand and step; frames in ``fixed`` unchanged."""
+    fixed = np.zeros(motion.num_frames, bool) if fixed is None else np.asarray(fixed, bool)
+    if fixed.shape != (motion.num_frames,):
+        raise ParameterError(f"fixed frames must be a ({motion.num_frames},) mask, got {fixed.shape}")
+    if motion.num_frames < 3 or tuple(motion.skeleton.parents) != tuple(SMPL24.parents) or fixed.all():
+        return motion  # another skeleton's legs are not where SMPL-24's are
+    positions = motion.joint_positions()
+    local = motion.rotation_matrices()
+    world = global_rotations(local, motion.skeleton.parents)
+    wanted = positions[:, [leg[2] for leg in LEGS]]
+    weight = fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
+    targets = wanted + (plan_steps(wanted, motion.fps, config) - wanted) * weight
+    parents = motion.skeleton.parents
+    for side, (hip, knee, ankle) in enumerate(LEGS):
+        hip_world, knee_world = two_bone_ik(world, positions, (hip, knee, ankle), targets[:, side])
+        local[:, hip] = np.swapaxes(world[:, parents[hip]], -1, -2) @ hip_world
+        local[:, knee] = np.swapaxes(hip_world, -1, -2) @ knee_world
+        local[:, ankle] = np.swapaxes(knee_world, -1, -2) @ world[:, ankle]  # the foot keeps its orientation
+    rotations = rot.matrix_to_quaternion(local)
+    rotations[fixed] = motion.rotations[fixed]  # exactly as given, not merely within rounding
+    return motion.replace(rotations=rotations, metadata=dict(motion.metadata))

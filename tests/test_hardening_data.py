@@ -1,0 +1,106 @@
+"""Issue 38, items 7-9 on datasets: M2D reading, genres.json and the feature cache, from bytes."""
+
+from __future__ import annotations
+
+import json
+import os
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from choreo.datasets import cache, m2d
+from choreo.datasets.bvh_folder import _read_mapping
+from choreo.errors import DatasetError
+
+
+def clip(tmp_path, frames: int = 40, config=None):
+    folder = tmp_path / "DANCE_C_1"
+    folder.mkdir()
+    rng = np.random.default_rng(0)
+    skeletons = np.round(rng.normal(size=(frames, 23, 3)) * 50, 4).tolist()
+    (folder / "skeletons.json").write_text(json.dumps({"center": np.zeros((frames, 3)).tolist(),
+                                                        "skeletons": skeletons, "length": frames}))
+    (folder / "config.json").write_text(config or '{"start_position": 0, "end_position": 40}')
+    return folder
+
+
+def test_skeletons_json_is_read_without_a_python_float_per_number(tmp_path):
+    folder = clip(tmp_path, frames=3000)
+    tracemalloc.start()
+    recording = m2d.read_recording(folder)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert recording.markers.shape == (3000, 23, 3)
+    assert peak < 5 * (folder / "skeletons.json").stat().st_size  # json.loads took over 8x
+
+
+@pytest.mark.parametrize("config", ['{"start_position": 1e999, "end_position": 40}',
+                                    '{"start_position": 0, "end_position": -1e999}'])
+def test_infinite_positions_in_config_are_a_dataset_error(tmp_path, config):
+    with pytest.raises(DatasetError, match="finite"):
+        m2d.read_recording(clip(tmp_path, config=config))
+
+
+def test_deeply_nested_dataset_json_is_a_dataset_error(tmp_path):
+    (tmp_path / "genres.json").write_text("[" * 10**6)
+    with pytest.raises(DatasetError):
+        _read_mapping(tmp_path / "genres.json")
+    (tmp_path / "DANCE_C_1").mkdir()
+    (tmp_path / "DANCE_C_1" / "config.json").write_text('{"a": ' * 10**5 + "1" + "}" * 10**5)
+    with pytest.raises(DatasetError):
+        m2d._read_json(tmp_path / "DANCE_C_1" / "config.json")
+
+
+class FakeMusic:
+    """Stands in for choreo.music.Music: counts analyses, takes what the cache hands back."""
+
+    analysed = 0
+
+    def __init__(self, **fields):
+        self.__dict__.update(fields)
+
+    @classmethod
+    def from_file(cls, path, start=None, end=None):
+        cls.analysed += 1
+        return cls(path=path, duration=2.0, fps=30.0, features=np.ones((60, 4)), beat_times=np.array([0.5, 1.0]),
+                   tempo=120.0, start=0.0)
+
+
+@pytest.fixture
+def fake_music(monkeypatch, tmp_path):
+    import choreo.music
+
+    monkeypatch.setenv("CHOREO_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(choreo.music, "Music", FakeMusic)
+    FakeMusic.analysed = 0
+    return FakeMusic
+
+
+def planted(entry, **arrays):
+    good = {"features": np.ones((60, 4)), "beat_times": np.array([0.5]), "tempo": 120.0, "duration": 2.0, "fps": 30.0}
+    with open(entry, "wb") as handle:
+        np.savez(handle, **{**good, **arrays})
+
+
+@pytest.mark.parametrize("bad", [{"features": np.full((60, 4), np.nan)}, {"features": np.ones(60)},
+                                 {"features": np.array(["x"])}, {"beat_times": np.array([np.inf])},
+                                 {"fps": -30.0}, {"duration": np.ones(3)}, {"tempo": np.nan}])
+def test_a_planted_cache_entry_is_recomputed_not_trusted(tmp_path, fake_music, bad):
+    song = tmp_path / "song.wav"
+    song.write_bytes(b"RIFF" + bytes(100))
+    cache.cached_music(song)
+    entry, = (tmp_path / "cache" / "features").iterdir()
+    planted(entry, **bad)
+    music = cache.cached_music(song)
+    assert fake_music.analysed == 2 and np.isfinite(music.features).all()
+    assert cache.cached_music(song) is not None and fake_music.analysed == 2  # the rewritten entry is used
+
+
+def test_audio_replaced_with_the_same_size_and_time_is_analysed_again(tmp_path, fake_music):
+    song = tmp_path / "song.wav"
+    for content in (b"a" * 3_000_000, b"a" * 2_999_999 + b"b"):  # only the last MiB differs: cp -p
+        song.write_bytes(content)
+        os.utime(song, ns=(10**18, 10**18))
+        cache.cached_music(song)
+    assert fake_music.analysed == 2

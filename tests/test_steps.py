@@ -1,0 +1,109 @@
+"""The step planner (choreo.finishing.steps): feet that stand until the body leaves them, then step."""
+
+import numpy as np
+import pytest
+
+from choreo.errors import ParameterError
+from choreo.finishing import finish
+from choreo.finishing.steps import HORIZONTAL, LEGS, StepConfig, fixed_weights, plan_steps, steps
+from choreo.metrics.stepping import stepping
+from choreo.motion import Motion
+
+FPS = 30.0
+
+
+def glider(seconds: float = 4.0, speed: float = 0.6, seed: int = 0) -> Motion:
+    """A body gliding forward at ``speed`` with slightly bent, gently moving legs: the generated
+    dancer's fault in its plainest form."""
+    frames = int(seconds * FPS)
+    rng = np.random.default_rng(seed)
+    axis_angle = np.zeros((frames, 24, 3))
+    for hip, knee, _ in LEGS:
+        axis_angle[:, hip, 0] = -0.3 + 0.05 * np.sin(np.arange(frames) / 7 + hip)
+        axis_angle[:, knee, 0] = 0.5 + 0.05 * np.sin(np.arange(frames) / 5 + knee)
+    axis_angle[:, 16:22] += rng.normal(scale=0.05, size=(frames, 6, 3))  # arms that move
+    root = np.zeros((frames, 3))
+    root[:, 1] = 0.88
+    root[:, 2] = speed * np.arange(frames) / FPS
+    return Motion.from_axis_angle(root, axis_angle, fps=FPS)
+
+
+def test_planned_feet_stand_between_steps_and_step_one_at_a_time():
+    wanted = glider().joint_positions()[:, [7, 8]]
+    config = StepConfig()
+    planned = plan_steps(wanted, FPS, config)
+    moving = np.linalg.norm(np.diff(planned, axis=0) * HORIZONTAL, axis=-1) > 1e-9  # (T-1, 2)
+    assert not (moving[:, 0] & moving[:, 1]).any()  # never both feet in the air
+    assert moving[:, 0].any() and moving[:, 1].any()  # both feet step
+    assert 0.3 < moving.any(axis=1).mean() < 0.9  # standing phases between steps
+    drift = np.linalg.norm((planned - wanted) * HORIZONTAL, axis=-1)
+    # a foot waits at most for the other's swing, then swings itself: never further behind than that
+    assert drift.max() < config.trigger + 2 * 0.6 * config.swing_seconds + 0.02
+
+
+def test_a_body_that_stays_keeps_its_feet_still():
+    still = glider(speed=0.0)
+    wanted = still.joint_positions()[:, [7, 8]]
+    planned = plan_steps(wanted, FPS)
+    assert np.abs(planned - wanted[:1]).max() < 1e-12  # no step: both feet where they began
+
+
+def test_steps_move_only_the_legs_and_reach_their_targets():
+    motion = glider()
+    out = steps(motion)
+    before, after = motion.joint_positions(), out.joint_positions()
+    np.testing.assert_array_equal(out.root_positions, motion.root_positions)
+    upper = [j for j in range(24) if j not in (1, 2, 4, 5, 7, 8, 10, 11)]
+    np.testing.assert_allclose(after[:, upper], before[:, upper], atol=1e-9)
+    planned = plan_steps(before[:, [7, 8]], FPS)
+    leg = np.linalg.norm(before[0, 4] - before[0, 1]) + np.linalg.norm(before[0, 7] - before[0, 4])
+    reachable = np.linalg.norm(planned - before[:, [1, 2]], axis=-1) < leg - 0.01
+    assert reachable.mean() > 0.8
+    assert np.linalg.norm(after[:, [7, 8]] - planned, axis=-1)[reachable].max() < 1e-6  # met where the leg reaches
+    feet_world = lambda m: m.rotation_matrices()  # noqa: E731
+    from choreo.skeleton.kinematics import global_rotations
+    parents = motion.skeleton.parents
+    np.testing.assert_allclose(global_rotations(feet_world(out), parents)[:, [7, 8]],
+                               global_rotations(feet_world(motion), parents)[:, [7, 8]], atol=1e-6)  # feet keep their turn
+
+
+def test_steps_turn_a_glide_into_stepping():
+    motion = glider()
+    glide, walk = stepping(motion.joint_positions(), FPS), stepping(steps(motion).joint_positions(), FPS)
+    assert glide.planted_share < 0.1 and glide.support_slide > 0.85
+    assert walk.planted_share > 0.5 and walk.support_slide < 0.3
+
+
+def test_fixed_frames_stay_exact_and_the_correction_fades_in():
+    motion = glider()
+    fixed = np.zeros(motion.num_frames, bool)
+    fixed[:20] = fixed[-10:] = True
+    out = steps(motion, fixed)
+    np.testing.assert_array_equal(out.rotations[fixed], motion.rotations[fixed])
+    weights = fixed_weights(fixed, FPS, 0.3)
+    assert weights[19] == 0 and weights[20] == pytest.approx(1 / 9) and weights[60] == 1
+    assert steps(motion, np.ones(motion.num_frames, bool)) is motion
+
+
+def test_other_skeletons_and_short_dances_pass_through():
+    from choreo.skeleton import Skeleton
+
+    motion = glider(seconds=1.0)
+    assert steps(motion.slice_frames(0, 2)) .num_frames == 2
+    parents = list(motion.skeleton.parents)
+    parents[7] = 0  # an ankle hanging from the pelvis: not SMPL-24's legs
+    other = Skeleton(motion.skeleton.names, tuple(parents), motion.skeleton.offsets)
+    odd = Motion(motion.root_positions, motion.rotations, fps=FPS, skeleton=other)
+    assert steps(odd) is odd
+    with pytest.raises(ParameterError):
+        steps(motion, np.zeros(3, bool))
+    with pytest.raises(ParameterError):
+        StepConfig(trigger=0)
+
+
+def test_finish_runs_the_planner_when_asked():
+    motion = glider()
+    plain = finish(motion, np.array([]), beat=False, speed=False)
+    stepped = finish(motion, np.array([]), beat=False, speed=False, footsteps=True)
+    assert plain is motion
+    assert stepping(stepped.joint_positions(), FPS).planted_share > 0.5
