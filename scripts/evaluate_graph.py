@@ -74,6 +74,8 @@ def main() -> None:
     parser.add_argument("--finished", action="store_true",
                         help="also score each dance after the beat lock (choreo.finishing), side by side")
     parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without the step planner (choreo.finishing.steps)")
     args = parser.parse_args()
 
     clips = load_dataset(args.data)
@@ -100,11 +102,13 @@ def main() -> None:
     for top_k in args.top_k:
         for variant in args.variants:
             options = {"top_k": top_k, **VARIANTS[variant]}
-            for finished in (False, True) if args.finished else (False,):
+            for finished, footsteps in [(False, False), *([(True, False)] if args.finished and args.no_footsteps else []),
+                                        *([(True, True)] if args.finished else [])]:
                 started = time.perf_counter()
-                report, _ = score_generator(generator, scoring, with_style=False, options=options, finished=finished,
-                                            foot_lock=args.foot_lock)
-                label = f"{variant}, K={top_k}{', finished' if finished else ''} ({time.perf_counter() - started:.0f} s)"
+                report, _ = score_generator(generator, scoring, with_style=False, seed=args.seed, options=options, finished=finished,
+                                            foot_lock=args.foot_lock, footsteps=footsteps)
+                label = (f"{variant}, K={top_k}{', finished' if finished else ''}{', no footsteps' if finished and not footsteps else ''} "
+                         f"({time.perf_counter() - started:.0f} s)")
                 print(table_row(label, report), flush=True)
 
 

@@ -42,7 +42,7 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--finished", action="store_true",
                         help="also score each dance after the beat lock (choreo.finishing), side by side")
-    parser.add_argument("--footsteps", action="store_true", help="with --finished: the step planner too (choreo.finishing.steps)")
+    parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without the step planner (choreo.finishing.steps)")
     parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
     parser.add_argument("--by-genre", action="store_true",
                         help="also score each genre's windows against the train windows of that genre")
@@ -72,16 +72,17 @@ def main() -> None:
                          + (f", style w={style_w:g}" if style_w not in (None, 1.0) else "")
                          + (f" on t/T {style_interval}" if style_w != 1.0 and style_bounds != (0.0, 1.0) else "")
                          + (", no style" if args.no_style else ""))
-                for finished in (False, True) if args.finished else (False,):
+                for finished, footsteps in [(False, False), *([(True, False)] if args.finished and args.no_footsteps else []),
+                                            *([(True, True)] if args.finished else [])]:
                     options = {"steps": steps, "guidance": guidance, "guidance_interval": bounds,
                                "style_guidance_interval": style_bounds}  # same noise both times
                     if style_w is not None:
                         options["style_guidance"] = style_w
                     report, dances = score_generator(generator, scoring, with_style=not args.no_style, seed=args.seed,
                                                      options=options, finished=finished, foot_lock=args.foot_lock,
-                                                     footsteps=args.footsteps)
+                                                     footsteps=footsteps)
                     recognised = classifier.agreement([d.positions for d in dances], genres)
-                    print(table_row(label + (", finished" if finished else "") + (", footsteps" if finished and args.footsteps else ""), report)
+                    print(table_row(label + (", finished" if finished else "") + (", no footsteps" if finished and not footsteps else ""), report)
                           + f" <!-- genre recognised {100 * recognised:.1f} %, {root_speeds(dances, genres, real)}, "
                           f"{time.time() - started:.0f} s -->", flush=True)
                     if args.by_genre:

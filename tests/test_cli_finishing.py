@@ -26,7 +26,7 @@ def test_beat_lock_is_on_by_default_and_moves_motion_beats_onto_music_beats(tmp_
 
 
 def test_foot_lock_is_asked_for_and_moves_only_the_root(tmp_path, capsys):
-    args = ("generate", EXAMPLE_SONG, "--steps", "2", "--no-beat-lock")
+    args = ("generate", EXAMPLE_SONG, "--steps", "2", "--no-beat-lock", "--no-footsteps")
     assert run_cli(capsys, *args, "-o", tmp_path / "raw.npz")[0] == 0
     assert run_cli(capsys, *args, "-o", tmp_path / "feet.npz", "--foot-lock")[0] == 0
     raw, feet = read_motion(tmp_path / "raw.npz"), read_motion(tmp_path / "feet.npz")
@@ -127,3 +127,15 @@ def test_sampling_flags_given_to_the_graph_are_refused_by_name(tmp_path, capsys)
                            "--steps", "50", "--guidance", "3")
     assert code == 2 and "--steps, --guidance are not options of graph (its options: " in err
     assert not (tmp_path / "x.bvh").exists()
+
+
+def test_footsteps_are_on_by_default_and_move_only_the_legs(tmp_path, capsys):
+    args = ("generate", EXAMPLE_SONG, "--steps", "2", "--no-beat-lock")
+    assert run_cli(capsys, *args, "-o", tmp_path / "stepped.npz")[0] == 0
+    assert run_cli(capsys, *args, "-o", tmp_path / "glide.npz", "--no-footsteps")[0] == 0
+    stepped, glide = read_motion(tmp_path / "stepped.npz"), read_motion(tmp_path / "glide.npz")
+    np.testing.assert_allclose(stepped.root_positions, glide.root_positions, atol=1e-6)
+    legs = [1, 2, 4, 5, 7, 8]
+    others = [j for j in range(24) if j not in legs]
+    np.testing.assert_allclose(stepped.rotations[:, others], glide.rotations[:, others], atol=1e-6)
+    assert not np.allclose(stepped.rotations[:, legs], glide.rotations[:, legs], atol=1e-3)

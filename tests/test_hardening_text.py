@@ -11,7 +11,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from choreo.cli import main
 from choreo.cli.text import markup, plain

@@ -144,35 +144,17 @@ def test_the_graph_dances_to_music_made_from_an_array():
         choreo.dance(Music.from_array(click_track(120.0, 8.0, SAMPLE_RATE), SAMPLE_RATE), generator="graph")
 
 
-def test_the_backend_loads_while_the_song_is_analysed(monkeypatch, tiny_checkpoint):
-    """The weights load on a thread that starts before the analysis: the factory below only
-    returns once the analysis has begun, which a load done first would wait for in vain."""
-    import dataclasses
-    import threading
-
-    import choreo.generator
+def test_the_song_is_analysed_before_the_backend_loads(monkeypatch, tiny_checkpoint):
+    """A song that cannot be read fails before torch and the weights are loaded."""
     import choreo.pipeline
 
-    analysing, seen = threading.Event(), {}
-    plugins = choreo.generator.available_plugins()
-    build = plugins["sgmd"].factory
-
-    def patient_factory(checkpoint, **options):
-        seen["overlapped"] = analysing.wait(timeout=20)
-        return build(checkpoint, **options)
-
-    monkeypatch.setattr(choreo.generator, "available_plugins",
-                        lambda: {**plugins, "sgmd": dataclasses.replace(plugins["sgmd"], factory=patient_factory)})
+    order = []
     monkeypatch.setattr(choreo.pipeline, "_BACKENDS", {})
-    analyse = Music.from_file
-
-    def from_file(*args, **kwargs):
-        analysing.set()
-        return analyse(*args, **kwargs)
-
-    monkeypatch.setattr(Music, "from_file", from_file)
+    load, analyse = choreo.pipeline.PendingBackend.result, Music.from_file
+    monkeypatch.setattr(choreo.pipeline.PendingBackend, "result", lambda self: order.append("load") or load(self))
+    monkeypatch.setattr(Music, "from_file", lambda *a, **k: order.append("analyse") or analyse(*a, **k))
     motion = choreo.dance(SONG, checkpoint=tiny_checkpoint, options={"steps": 2})
-    assert seen == {"overlapped": True} and motion.num_frames > 0
+    assert order == ["analyse", "load"] and motion.num_frames > 0
 
 
 def test_what_a_plugin_says_it_reads_of_the_music_is_what_its_backend_reads():
@@ -189,7 +171,7 @@ def test_an_error_while_loading_reaches_the_caller(tmp_path):
 
     damaged = tmp_path / "damaged.pt"
     damaged.write_bytes(b"not a checkpoint")
-    pending = PendingBackend("sgmd", damaged)
+    pending = PendingBackend("sgmd", damaged)  # not read yet
     assert pending.reads_timbre and not pending.listens_to_spectrum  # known before the weights are read
     with pytest.raises(InputError, match="damaged.pt"):
         pending.result()
@@ -197,9 +179,7 @@ def test_an_error_while_loading_reaches_the_caller(tmp_path):
         choreo.dance(SONG, checkpoint=damaged)
 
 
-def test_a_song_that_cannot_be_read_while_the_backend_loads_exits_with_one_line(tmp_path):
-    """The loading thread is still importing torch when the analysis fails; the process must
-    still end with the one-line error and its exit code, not a crash at interpreter shutdown."""
+def test_a_song_that_cannot_be_read_exits_with_one_line(tmp_path):
     bad = tmp_path / "noise.wav"
     bad.write_bytes(b"RIFF....WAVEfmt not really")
     for _ in range(3):

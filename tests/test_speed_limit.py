@@ -91,4 +91,5 @@ def test_finish_applies_it_by_default_and_not_when_told():
     motion = spinning()
     no_beats = np.zeros(0, int)
     assert joint_speeds(finish(motion, no_beats)).max() <= REAL_JOINT_SPEED
-    np.testing.assert_array_equal(finish(motion, no_beats, speed=False, beat=False).rotations, motion.rotations)
+    np.testing.assert_array_equal(finish(motion, no_beats, speed=False, beat=False, footsteps=False).rotations,
+                                  motion.rotations)

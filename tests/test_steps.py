@@ -44,18 +44,22 @@ def test_planned_feet_stand_between_steps_and_step_one_at_a_time():
 def test_a_body_that_stays_keeps_its_feet_still():
     still = glider(speed=0.0)
     wanted = still.joint_positions()[:, [7, 8]]
-    planned = plan_steps(wanted, FPS)
+    drift = np.linalg.norm((wanted - wanted[:1]) * HORIZONTAL, axis=-1).max()  # the legs sway a little
+    planned = plan_steps(wanted, FPS, StepConfig(trigger=drift + 0.01))
     assert np.abs(planned - wanted[:1]).max() < 1e-12  # no step: both feet where they began
+
+
+FULL = StepConfig(strength=1.0)
 
 
 def test_steps_move_only_the_legs_and_reach_their_targets():
     motion = glider()
-    out = steps(motion)
+    out = steps(motion, config=FULL)
     before, after = motion.joint_positions(), out.joint_positions()
     np.testing.assert_array_equal(out.root_positions, motion.root_positions)
     upper = [j for j in range(24) if j not in (1, 2, 4, 5, 7, 8, 10, 11)]
     np.testing.assert_allclose(after[:, upper], before[:, upper], atol=1e-9)
-    planned = plan_steps(before[:, [7, 8]], FPS)
+    planned = plan_steps(before[:, [7, 8]], FPS, FULL)
     leg = np.linalg.norm(before[0, 4] - before[0, 1]) + np.linalg.norm(before[0, 7] - before[0, 4])
     reachable = np.linalg.norm(planned - before[:, [1, 2]], axis=-1) < leg - 0.01
     assert reachable.mean() > 0.8
@@ -69,9 +73,21 @@ def test_steps_move_only_the_legs_and_reach_their_targets():
 
 def test_steps_turn_a_glide_into_stepping():
     motion = glider()
-    glide, walk = stepping(motion.joint_positions(), FPS), stepping(steps(motion).joint_positions(), FPS)
+    glide, walk = stepping(motion.joint_positions(), FPS), stepping(steps(motion, config=FULL).joint_positions(), FPS)
     assert glide.planted_share < 0.1 and glide.support_slide > 0.85
     assert walk.planted_share > 0.5 and walk.support_slide < 0.3
+
+
+def test_strength_takes_the_ankles_part_of_the_way():
+    motion = glider()
+    before = motion.joint_positions()[:, [7, 8]]
+    planned = plan_steps(before, FPS, FULL)
+    for strength in (0.0, 0.6):
+        after = steps(motion, config=StepConfig(strength=strength)).joint_positions()[:, [7, 8]]
+        wanted = before + strength * (planned - before)
+        assert np.median(np.linalg.norm(after - wanted, axis=-1)) < 1e-6  # where the leg reaches
+    with pytest.raises(ParameterError):
+        StepConfig(strength=1.5)
 
 
 def test_fixed_frames_stay_exact_and_the_correction_fades_in():
@@ -103,7 +119,8 @@ def test_other_skeletons_and_short_dances_pass_through():
 
 def test_finish_runs_the_planner_when_asked():
     motion = glider()
-    plain = finish(motion, np.array([]), beat=False, speed=False)
-    stepped = finish(motion, np.array([]), beat=False, speed=False, footsteps=True)
+    plain = finish(motion, np.array([]), beat=False, speed=False, footsteps=False)
+    stepped = finish(motion, np.array([]), beat=False, speed=False)  # on by default
     assert plain is motion
-    assert stepping(stepped.joint_positions(), FPS).planted_share > 0.5
+    before, after = (stepping(m.joint_positions(), FPS) for m in (motion, stepped))
+    assert after.planted_share > 0.2 > before.planted_share and after.support_slide < 0.5 * before.support_slide

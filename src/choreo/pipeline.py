@@ -14,7 +14,6 @@ The beats are the tracker's unless the caller knows them: ``bpm=128`` or ``beats
 from __future__ import annotations
 
 import os
-import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Union
@@ -35,7 +34,7 @@ class Finishing:
     beat_lock: bool = True  # motion beats re-timed onto the music's beats (given frames stay)
     foot_lock: bool = False  # planted feet's drift moved onto the root (halves PFC, doubles FID_g)
     speed_limit: bool = True  # turns and dashes faster than real dancers' spread over neighbouring frames
-    footsteps: bool = False  # feet stand until the body leaves them, then step (legs by IK)
+    footsteps: bool = True  # feet stand until the body leaves them, then step (legs by IK; docs/results.md, "Feet")
 
 
 _BACKENDS: dict[tuple, "Generator"] = {}
@@ -44,21 +43,18 @@ _BACKENDS: dict[tuple, "Generator"] = {}
 def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options) -> "Generator":
     """The backend ``name`` loaded from ``checkpoint`` (default: its bundled one), kept for reuse:
     a script dancing many songs loads the weights once."""
-    return PendingBackend(name, checkpoint, background=False, **factory_options).result()
+    return PendingBackend(name, checkpoint, **factory_options).result()
 
 
 class PendingBackend:
-    """A backend loading on a background thread while the caller analyses the song.
-
-    Importing torch and reading the weights take about a second in a fresh process, as long as
-    analysing a minute of music, and the two overlap (numpy's transforms and the audio decoder
-    release the GIL). What the backend reads of the music comes from its plugin, so the analysis
-    does not wait for the weights. An unknown backend or a missing bundled checkpoint is refused
-    at once; an error while loading is raised by :meth:`result`.
+    """A backend checked now and loaded when first needed: after the song is analysed, so a song
+    that cannot be read fails before torch is imported. What the backend reads of the music comes
+    from its plugin, so the analysis does not wait for the weights. An unknown backend or a
+    missing bundled checkpoint is refused at once. (Loading on a thread during the analysis saved
+    2-5 % of a `choreo generate`, measured on 2026-12-04: removed, docs/results.md.)
     """
 
-    def __init__(self, name: str, checkpoint: str | os.PathLike | None = None, background: bool = True,
-                 **factory_options):
+    def __init__(self, name: str, checkpoint: str | os.PathLike | None = None, **factory_options):
         self.name, self.plugin = name, _available_plugin(name)
         if checkpoint is None:
             checkpoint = self.plugin.default_checkpoint
@@ -66,17 +62,8 @@ class PendingBackend:
                 from .errors import ChoreoError
 
                 raise ChoreoError(f"{name} has no bundled checkpoint; pass a checkpoint")
+        self._checkpoint, self._options = checkpoint, factory_options
         self._key = (name, str(checkpoint), tuple(sorted((k, str(v)) for k, v in factory_options.items())))
-        self._error: BaseException | None = None
-        self._thread = None
-        if self._key in _BACKENDS:
-            return
-        if not background:  # nothing to overlap with: load here
-            self._load(checkpoint, factory_options)
-            return
-        self._thread = threading.Thread(target=self._load, args=(checkpoint, factory_options),
-                                        name=f"choreo: loading {name}", daemon=True)  # Ctrl-C need not wait for it
-        self._thread.start()
 
     @property
     def listens_to_spectrum(self) -> bool:
@@ -86,18 +73,10 @@ class PendingBackend:
     def reads_timbre(self) -> bool:
         return self.plugin.reads_timbre
 
-    def _load(self, checkpoint, factory_options: dict) -> None:
-        try:
-            _BACKENDS[self._key] = self.plugin.factory(checkpoint, **factory_options)
-        except BaseException as error:  # noqa: BLE001 - handed to the caller's thread by result()
-            self._error = error
-
     def result(self) -> "Generator":
-        """The loaded backend, once it is (the loading thread's error, if it failed)."""
-        if self._thread is not None:
-            self._thread.join()
-        if self._error is not None:
-            raise self._error
+        """The loaded backend (loaded now if no earlier call has)."""
+        if self._key not in _BACKENDS:
+            _BACKENDS[self._key] = self.plugin.factory(self._checkpoint, **self._options)
         return _BACKENDS[self._key]
 
 

@@ -38,7 +38,7 @@ BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
                          help="Re-time the dance so its motion beats land on the music's beats (given frames stay).")
 FOOT_LOCK = typer.Option(False, "--foot-lock/--no-foot-lock",
                          help="Let planted feet carry the body instead of sliding (halves PFC, doubles FID_g: off by default).")
-FOOTSTEPS = typer.Option(False, "--footsteps/--no-footsteps",
+FOOTSTEPS = typer.Option(True, "--footsteps/--no-footsteps",
                          help="Plan steps: each foot stands until the body leaves it, then steps (legs by IK; docs/results.md, \"Feet\").")
 SPEED_LIMIT = typer.Option(True, "--speed-limit/--no-speed-limit",
                            help="Spread turns and dashes faster than real dancers move over the frames around them.")
@@ -289,7 +289,7 @@ class Settings:
     style_guidance: float | None = None  # None: the backend's default
     beats: BeatSource | None = None  # --bpm or --beats; None: the tracker's beats
     threads: int | None = None  # --threads; None: choreo.threads decides per dance
-    footsteps: bool = False  # finishing: the step planner (choreo.finishing.steps)
+    footsteps: bool = True  # finishing: the step planner (choreo.finishing.steps)
 
 
 def beat_source(bpm: float | None, beats: Path | None) -> BeatSource:
@@ -333,7 +333,7 @@ def guidance_summary(meta: dict) -> str:
 
 
 def load_backend(settings: Settings, **factory_options):
-    """The backend, loading in the background while the first song is analysed (PendingBackend)."""
+    """The backend, checked now and loaded once the first song is analysed (PendingBackend)."""
     from ..pipeline import PendingBackend
 
     return PendingBackend(settings.generator, settings.checkpoint, **factory_options)

@@ -11,7 +11,6 @@ music is assumed to start with the motion's first frame.
 
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 

@@ -1,6 +1,6 @@
 """Passes every generated dance goes through after its backend: speed limit (no joint faster
-than real dancers move), beat lock (re-timing onto the music's beats), then foot lock (planted
-feet carry the body instead of sliding)."""
+than real dancers move), beat lock (re-timing onto the music's beats), footsteps (feet that stand
+and step instead of gliding), and, when asked, foot lock (planted feet carry the body)."""
 
 import numpy as np
 
@@ -12,9 +12,9 @@ from .steps import StepConfig, steps as planted_steps
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | None = None, *,
-           beat: bool = True, foot: bool = False, speed: bool = True, footsteps: bool = False) -> Motion:
-    """The passes as `choreo generate` applies them by default: speed limit, beat lock (and, when
-    asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
+           beat: bool = True, foot: bool = False, speed: bool = True, footsteps: bool = True) -> Motion:
+    """The passes as `choreo generate` applies them by default: speed limit, beat lock, footsteps (and,
+    when asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
     The speed limit goes first, so that a glitch is not taken for a motion beat, and last, since
     re-timing speeds stretches up by as much as 1.33 x."""
     if speed:

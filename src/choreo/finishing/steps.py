@@ -31,14 +31,19 @@ HORIZONTAL = np.array([1.0, 0.0, 1.0])  # Y is up
 
 @dataclass(frozen=True)
 class StepConfig:
-    trigger: float = 0.12  # metres: a standing foot this far (horizontally) from where the dance wants it steps
-    swing_seconds: float = 0.3  # how long a step takes in the air
+    trigger: float = 0.06  # metres: a standing foot this far (horizontally) from where the dance wants it steps
+    swing_seconds: float = 0.25  # how long a step takes in the air
     lift: float = 0.04  # metres the ankle rises at the middle of a step
     blend_seconds: float = 0.3  # fade of the correction next to frames a user fixed
+    # How far each ankle goes from where the dance puts it to where the plan does. All the way, feet
+    # stand 97 % of the time (real dancers: 39 %) and FID_g rises by 5; 0.6 measured best (docs/results.md, "Feet").
+    strength: float = 0.6
 
     def __post_init__(self):
         if self.trigger <= 0 or self.swing_seconds <= 0 or self.lift < 0 or self.blend_seconds <= 0:
             raise ParameterError("steps: trigger, swing and blend must be positive, lift >= 0")
+        if not 0.0 <= self.strength <= 1.0:
+            raise ParameterError(f"steps: strength must be in [0, 1], got {self.strength}")
 
 
 def plan_steps(wanted: np.ndarray, fps: float, config: StepConfig = StepConfig()) -> np.ndarray:
@@ -120,7 +125,7 @@ def steps(motion: Motion, fixed: np.ndarray | None = None, config: StepConfig = 
     local = motion.rotation_matrices()
     world = global_rotations(local, motion.skeleton.parents)
     wanted = positions[:, [leg[2] for leg in LEGS]]
-    weight = fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
+    weight = config.strength * fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
     targets = wanted + (plan_steps(wanted, motion.fps, config) - wanted) * weight
     parents = motion.skeleton.parents
     for side, (hip, knee, ankle) in enumerate(LEGS):

@@ -74,6 +74,6 @@ class GeneratorPlugin:
     options: type | None = None  # dataclass of its generation options: flags are checked against it before any work
     constraints: bool = False  # whether it dances under constraints (keys, seed motion, inpainting, a root path)
     # what it reads of the music (its Generator's attributes of the same names), known before it
-    # loads, so the song is analysed while the weights load (choreo.pipeline.PendingBackend)
+    # loads, so the song is analysed before the weights are read (choreo.pipeline.PendingBackend)
     listens_to_spectrum: bool = False
     reads_timbre: bool = True

@@ -39,9 +39,10 @@ def music_beats(features: np.ndarray) -> np.ndarray:
     return np.flatnonzero(features[:, BEAT_COLUMN] > 0.5)
 
 
-def window_dance(window, motion, finished: bool = False, foot_lock: bool = False, footsteps: bool = False) -> Dance:
+def window_dance(window, motion, finished: bool = False, foot_lock: bool = False, footsteps: bool = True) -> Dance:
     """A generated ``motion`` for a scoring window as a Dance, optionally after the finishing passes
-    (the beat lock, and the foot lock when asked)."""
+    as `choreo generate` applies them (speed limit, beat lock, footsteps unless turned off, the foot
+    lock when asked)."""
     beats = music_beats(window.features)
     if finished:
         from ..finishing import finish
@@ -116,9 +117,9 @@ def generate_window_motions(generator: "Generator", windows: Sequence, *, with_s
 
 def score_generator(generator: "Generator", scoring: ScoringSet, *, with_style: bool = True, seed: int = 0,
                     options: dict[str, Any] | None = None, finished: bool = False,
-                    foot_lock: bool = False, footsteps: bool = False) -> tuple[EvaluationReport, list[Dance]]:
+                    foot_lock: bool = False, footsteps: bool = True) -> tuple[EvaluationReport, list[Dance]]:
     """Score a backend the way every quality table here is scored: its dances for the test windows
-    (after the beat lock, and the foot lock, when asked) against the reference dances."""
+    (after the finishing passes, ``footsteps`` and ``foot_lock`` as asked) against the reference dances."""
     log_mels = scoring.log_mels() if generator.listens_to_spectrum else None
     motions = generate_window_motions(generator, scoring.windows, with_style=with_style, seed=seed, options=options,
                                       log_mels=log_mels)
