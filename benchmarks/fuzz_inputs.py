@@ -1,7 +1,8 @@
 """Mutation fuzzing of every input format choreo reads (issue 18): no input may be an internal error.
 
 Valid seed files are made with choreo's own writers, mutated (byte flips, truncation, splices,
-number replacement, duplication, and field-level edits of NPZ/pickle/checkpoint contents) and fed
+number replacement, duplication, and field-level edits of NPZ/pickle/checkpoint/JSON contents and
+of a glb's accessors and buffer views) and fed
 to the same reader the CLI calls, in-process, inside long-lived forked workers that run under a
 memory cap and a per-input time limit. Each input is classified:
 
@@ -26,6 +27,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import io
+import json
 import multiprocessing
 import multiprocessing.connection
 import os
@@ -34,6 +36,7 @@ import random
 import re
 import resource
 import shutil
+import struct
 import sys
 import tempfile
 import time
@@ -47,8 +50,9 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-EXTENSIONS = {"bvh": ".bvh", "npz": ".npz", "npy": ".npy", "pkl": ".pkl", "glb": ".glb", "wav": ".wav",
-              "csv": ".csv", "sgmd": ".pt", "repertoire": ".npz"}  # fmt: skip
+EXTENSIONS = {"bvh": ".bvh", "npz": ".npz", "npy": ".npy", "pkl": ".pkl", "glb": ".glb", "json": ".json",
+              "wav": ".wav", "csv": ".csv", "beats": ".csv", "m2d": ".json", "m2dcfg": ".json", "sgmd": ".pt",
+              "repertoire": ".npz"}  # fmt: skip
 FORMATS = tuple(EXTENSIONS)
 ZIP_FORMATS = {"npz", "sgmd", "repertoire"}
 CLEAN = ("accepted", "refused")
@@ -76,6 +80,7 @@ def motion_seeds() -> dict[str, list[bytes]]:
     from choreo.formats.aistpp import write_aistpp_pkl
     from choreo.formats.bvh import write_bvh
     from choreo.formats.gltf import write_glb
+    from choreo.formats.json_format import write_json
     from choreo.formats.npy import write_npy
     from choreo.formats.npz import write_npz
     from choreo.formats.smpl_params import motion_to_smpl_params
@@ -86,7 +91,8 @@ def motion_seeds() -> dict[str, list[bytes]]:
     pickles = [pickle.dumps(params, protocol=p) for p in (0, 2, 5)]
     return {"bvh": [_write(motion, write_bvh), _write(_small_motion(3, 1), write_bvh, units="cm")],
             "npz": [_write(motion, write_npz)], "npy": [_write(motion, write_npy)],
-            "pkl": [_write(motion, write_aistpp_pkl)] + pickles, "glb": [_write(_small_motion(3, 2), write_glb)]}
+            "pkl": [_write(motion, write_aistpp_pkl)] + pickles, "glb": [_write(_small_motion(3, 2), write_glb)],
+            "json": [_write(_small_motion(3, 3), write_json)]}
 
 
 def wav_seeds() -> list[bytes]:
@@ -106,6 +112,28 @@ def wav_seeds() -> list[bytes]:
 def csv_seeds() -> list[bytes]:
     return [b"t,x,z\n0,0,0\n0.5,1,0.2\n1.0,1.5,-0.5\n2,0,0\n", b"0,0\n1,0.5\n2,2\n",
             b"time,x,y,z\n0,0,0.9,0\n1,1,0.95,1\n2,2,0.9,0\n", b"0,0,0\n1,1,1\n"]
+
+
+def beats_seeds() -> list[bytes]:
+    """The layouts `choreo generate --beats` reads: one time a line, CSV with a downbeat flag or a beat number."""
+    return [b"0.5\n1.0\n1.5\n2.0\n", b"beat_time,downbeat\n0.5,1\n1.0,0\n1.5,0\n2.0,0\n2.5,1\n",
+            b"time\tbeat\n0.48\t1\n0.98\t2\n1.5\t3\n2.0\t4\n", b"time;flag\n0.5;true\n1.1;false\n1.6;no\n"]
+
+
+M2D_FRAMES = 12  # read_recording wants at least 10
+
+
+def m2d_skeletons_seed() -> bytes:
+    """An M2D skeletons.json: 23 scattered markers (cm) about a centre 90 cm up, as the dataset lays it out."""
+    rng = np.random.default_rng(0)
+    markers = np.round(rng.normal(scale=30.0, size=(M2D_FRAMES, 23, 3)), 2).tolist()
+    return json.dumps({"length": M2D_FRAMES, "center": [[0.0, 90.0, 0.0]] * M2D_FRAMES,
+                       "skeletons": markers}).encode()
+
+
+def m2d_config_seeds() -> list[bytes]:
+    return [json.dumps({"start_position": 0, "end_position": M2D_FRAMES}).encode(),
+            b'{"start_position": 250, "end_position": 1210, "music": "x.mp3"}']
 
 
 def sgmd_seed(checkpoint: str | os.PathLike | None = None) -> bytes:
@@ -163,7 +191,8 @@ def repertoire_seed() -> bytes:
 def make_seeds(formats=FORMATS, sgmd_checkpoint=None) -> dict[str, list[bytes]]:
     """Valid seed files for each requested format, made by choreo's own writers."""
     seeds = motion_seeds()
-    seeds.update(wav=wav_seeds(), csv=csv_seeds())
+    seeds.update(wav=wav_seeds(), csv=csv_seeds(), beats=beats_seeds(), m2d=[m2d_skeletons_seed()],
+                 m2dcfg=m2d_config_seeds())
     if "sgmd" in formats:
         seeds["sgmd"] = [sgmd_seed(sgmd_checkpoint)]
     if "repertoire" in formats:
@@ -372,20 +401,22 @@ def _leaves(value, path=()):
         yield from _leaves(item, path + (key,))
 
 
-def mutate_tree(rng: random.Random, tree: dict) -> dict:
-    """Drop or replace one or two entries anywhere in a nested dict of values."""
+def mutate_tree(rng: random.Random, tree: dict, odd=odd_value, shallow: float = 0.0) -> dict:
+    """Drop or replace (by ``odd``) one or two entries anywhere in a nested dict of values; with
+    probability ``shallow`` among the top two levels only (names, counts, flags rather than array cells)."""
     for _ in range(rng.choice((1, 1, 2))):
         leaves = list(_leaves(tree))
+        top = [leaf for leaf in leaves if len(leaf[0]) <= 2]
         if not leaves:
             break
-        path, value = rng.choice(leaves)
+        path, value = rng.choice(top if top and rng.random() < shallow else leaves)
         parent = tree
         for key in path[:-1]:
             parent = parent[key]
         if isinstance(parent, dict) and rng.random() < 0.2:
             del parent[path[-1]]
         else:
-            parent[path[-1]] = odd_value(rng, value)
+            parent[path[-1]] = odd(rng, value)
     return tree
 
 
@@ -407,8 +438,88 @@ def mutate_checkpoint_fields(rng: random.Random, data: bytes, others: list[bytes
     return out.getvalue()
 
 
+DEEP = "\x00deep\x00"  # stands for nesting too deep to build as Python objects; spliced in as text
+HOSTILE_STRINGS = ("", "\x00", "a\nb", "<script>alert(1)</script>", "../../etc/passwd", "pelvis", "x" * 100_000,
+                   "\u202eevil", "%s%n{}", "\ud800", "é" * 50)
+
+
+def odd_json_value(rng: random.Random, value: object) -> object:
+    """A hostile JSON value: a joint-name-style string, deep nesting, or an odd number, type or shape."""
+    choice = rng.random()
+    if choice < 0.25:
+        return rng.choice(HOSTILE_STRINGS)
+    if choice < 0.4:
+        return DEEP
+    if choice < 0.5:
+        return rng.choice(([value] * 3, {"a": value}, 10**30, -(10**30), 1e308))
+    odd = odd_value(rng, value)
+    return odd.tolist() if isinstance(odd, np.ndarray) and odd.dtype.kind in "fiub" else \
+        None if isinstance(odd, np.ndarray) else odd
+
+
+def dump_json(rng: random.Random, tree: object) -> bytes:
+    """JSON text of ``tree``, each DEEP placeholder replaced by arrays nested 10 to 100,000 deep."""
+    text = json.dumps(tree, ensure_ascii=rng.random() < 0.5)
+    while json.dumps(DEEP) in text:
+        depth = rng.choice((10, 33, 1000, 100_000))
+        text = text.replace(json.dumps(DEEP), "[" * depth + "1" + "]" * depth, 1)
+    return text.encode("utf-8", "surrogatepass")
+
+
+def mutate_json_fields(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """A JSON seed with entries dropped or replaced by hostile values (joint names, counts, nesting)."""
+    return dump_json(rng, mutate_tree(rng, json.loads(data), odd_json_value, shallow=0.5))
+
+
+GLB_MAGIC, GLB_JSON, GLB_BIN = b"glTF", 0x4E4F534A, 0x004E4942
+GLB_FIELDS = ("count", "byteOffset", "byteLength", "byteStride", "componentType", "type", "bufferView", "buffer",
+              "input", "output", "sampler", "node")
+GLB_NUMBERS = (0, 1, 3, -1, 4, 7, 5126, 5121, 5123, 1 << 31, 1 << 62, 10**30, 2.5, 1e308, "4", None, "VEC4", "SCALAR",
+               "MAT4", [1])
+
+
+def glb_parts(data: bytes) -> tuple[dict, bytes]:
+    """The JSON document and BIN chunk of a glb written by choreo (a seed, never a mutated input)."""
+    json_length = struct.unpack_from("<I", data, 12)[0]
+    document = json.loads(data[20:20 + json_length])
+    return document, data[28 + json_length:]
+
+
+def pack_glb(text: bytes, blob: bytes) -> bytes:
+    """A glb with consistent chunk lengths, so a forged field reaches the accessor reader."""
+    text += b" " * (-len(text) % 4)
+    blob += b"\0" * (-len(blob) % 4)
+    chunks = struct.pack("<II", len(text), GLB_JSON) + text + struct.pack("<II", len(blob), GLB_BIN) + blob
+    return GLB_MAGIC + struct.pack("<II", 2, 12 + len(chunks)) + chunks
+
+
+def forge_glb_entry(rng: random.Random, document: dict) -> None:
+    """One accessor, buffer view or animation channel/sampler given a forged count, offset, stride,
+    type or index, or an accessor made sparse."""
+    lists = [key for key in ("accessors", "bufferViews", "buffers") if document.get(key)]
+    entry = rng.choice(document[rng.choice(lists)])
+    if "componentType" in entry and rng.random() < 0.2:
+        count = rng.choice((1, 2, entry.get("count", 1), 1 << 31))
+        entry["sparse"] = {"count": count, "indices": {"bufferView": 0, "componentType": 5125},
+                           "values": {"bufferView": rng.choice((0, 1, 99))}}
+        return
+    entry[rng.choice([key for key in GLB_FIELDS if key in entry] or list(GLB_FIELDS))] = rng.choice(GLB_NUMBERS)
+
+
+def mutate_glb_fields(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """The seed's glb with forged accessor/buffer-view fields (or any JSON entry made hostile), repacked."""
+    document, blob = glb_parts(data)
+    for _ in range(rng.choice((1, 1, 2))):
+        if rng.random() < 0.7:
+            forge_glb_entry(rng, document)
+        else:
+            mutate_tree(rng, document, odd_json_value, shallow=0.5)
+    return pack_glb(dump_json(rng, document), blob)
+
+
 FIELD_MUTATORS = {"npz": mutate_npz_fields, "repertoire": mutate_npz_fields, "pkl": mutate_pickle_fields,
-                  "sgmd": mutate_checkpoint_fields}
+                  "sgmd": mutate_checkpoint_fields, "json": mutate_json_fields, "m2d": mutate_json_fields,
+                  "m2dcfg": mutate_json_fields, "glb": mutate_glb_fields}
 
 
 def mutate(fmt: str, rng: random.Random, seeds: list[bytes]) -> bytes:
@@ -470,6 +581,39 @@ def read_csv_file(path: Path) -> None:
     path_to_frames(*read_root_path(path), 150)
 
 
+def read_beats_file(path: Path) -> None:
+    """`choreo generate --beats`: the beat file's reader and checks."""
+    from choreo.music.beat_file import read_beat_file
+
+    read_beat_file(path)
+
+
+def read_m2d_clip(path: Path, member: str) -> None:
+    """`choreo prepare` on an M2D folder up to the IK fit (which is too slow to fuzz): the clip read
+    from ``path`` as ``member`` beside a valid copy of the other JSON file, its IK targets, the
+    performer's proportions and the leg length its root path is divided by."""
+    from choreo.datasets.clips import leg_length
+    from choreo.datasets.ik import performer_skeleton
+    from choreo.datasets.m2d import read_recording
+
+    folder = path.parent / "DANCE_C_1"
+    folder.mkdir(exist_ok=True)
+    (folder / "skeletons.json").write_bytes(m2d_skeletons_seed())
+    (folder / "config.json").write_bytes(m2d_config_seeds()[0])
+    (folder / member).write_bytes(path.read_bytes())
+    recording = read_recording(folder)
+    targets, joints = recording.targets()
+    leg_length(performer_skeleton(targets, joints), recording.name)
+
+
+def read_m2d_skeletons(path: Path) -> None:
+    read_m2d_clip(path, "skeletons.json")
+
+
+def read_m2d_config(path: Path) -> None:
+    read_m2d_clip(path, "config.json")
+
+
 def read_sgmd_file(path: Path) -> None:
     """`choreo generate --checkpoint`: the generator built from the file."""
     from choreo_sgmd.generator import SGMDGenerator
@@ -489,8 +633,9 @@ def read_repertoire_file(path: Path) -> None:
 
 
 TARGETS = {"bvh": read_motion_file, "npz": read_motion_file, "pkl": read_motion_file, "glb": read_motion_file,
-           "npy": read_npy_file,
-           "wav": read_wav_file, "csv": read_csv_file, "sgmd": read_sgmd_file, "repertoire": read_repertoire_file}
+           "json": read_motion_file, "npy": read_npy_file, "wav": read_wav_file, "csv": read_csv_file,
+           "beats": read_beats_file, "m2d": read_m2d_skeletons, "m2dcfg": read_m2d_config, "sgmd": read_sgmd_file,
+           "repertoire": read_repertoire_file}
 
 
 def warm_up(seeds: dict[str, list[bytes]]) -> None:

@@ -104,3 +104,59 @@ def test_audio_replaced_with_the_same_size_and_time_is_analysed_again(tmp_path, 
         os.utime(song, ns=(10**18, 10**18))
         cache.cached_music(song)
     assert fake_music.analysed == 2
+
+
+def legless_clip(root):
+    """An M2D clip whose 23 markers sit at one point each frame: legs of zero length."""
+    root.mkdir()
+    folder = clip(root)
+    frames = 40
+    (folder / "skeletons.json").write_text(json.dumps({"center": [[0, 90, 0]] * frames, "length": frames,
+                                                        "skeletons": np.zeros((frames, 23, 3)).tolist()}))
+    (folder / "audio.mp3").write_bytes(b"")
+    return folder
+
+
+def test_a_recording_with_zero_leg_length_is_exit_2_through_prepare(tmp_path, monkeypatch, capsys):
+    from choreo.cli import main
+
+    monkeypatch.setenv("CHOREO_CACHE_DIR", str(tmp_path / "cache"))
+    legless_clip(tmp_path / "data")
+    code = main(["prepare", str(tmp_path / "data")])
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert code == 2 and len(err) == 1 and "legs have no usable length" in err[0], err
+
+
+@pytest.mark.parametrize("scale", [0.0, np.nan])
+def test_a_cached_fit_with_legless_or_non_finite_bones_is_a_dataset_error(scale):
+    from choreo.skeleton import SMPL24
+
+    fit = {"root_positions": np.zeros((3, 3)), "rotations": np.tile([1.0, 0, 0, 0], (3, 24, 1)),
+           "offsets": SMPL24.offsets * scale}
+    with pytest.raises(DatasetError, match="DANCE_C_1: the legs"):
+        m2d.standard_motion(fit, 25.0, {"source": "DANCE_C_1"})
+
+
+def test_a_bvh_with_zero_leg_offsets_converts_to_glb_and_mixamo(tmp_path):
+    import io
+
+    from choreo.formats import read_motion, write_motion
+    from choreo.formats.bvh import write_bvh
+    from choreo.formats.rigs import retarget
+    from choreo.errors import MotionFormatError
+    from choreo.motion import Motion
+    from choreo.skeleton import SMPL24
+
+    offsets = SMPL24.offsets.copy()
+    offsets[[1, 2, 4, 5, 7, 8, 10, 11]] = 0.0
+    motion = Motion.from_axis_angle(np.zeros((4, 3)), np.zeros((4, 24, 3)), fps=30.0,
+                                    skeleton=SMPL24.with_offsets(offsets))
+    buffer = io.BytesIO()
+    write_bvh(motion, buffer)
+    (tmp_path / "legless.bvh").write_bytes(buffer.getvalue())
+    legless = read_motion(tmp_path / "legless.bvh")
+    write_motion(legless, tmp_path / "out.glb")  # was a NaN in the glTF JSON: exit 70
+    write_motion(legless, tmp_path / "out.bvh", rig="mixamo")  # was "motion contains NaN"
+    assert np.isfinite(read_motion(tmp_path / "out.bvh").joint_positions()).all()
+    with pytest.raises(MotionFormatError, match="legs have no length"):
+        retarget(legless, "mixamo", lengths="rig")

@@ -124,3 +124,27 @@ def test_finish_runs_the_planner_when_asked():
     assert plain is motion
     before, after = (stepping(m.joint_positions(), FPS) for m in (motion, stepped))
     assert after.planted_share > 0.2 > before.planted_share and after.support_slide < 0.5 * before.support_slide
+
+
+def test_long_dances_are_turned_a_chunk_at_a_time_with_the_same_result(monkeypatch):
+    import choreo.finishing.steps as module
+
+    motion = glider(seconds=2.0)
+    whole = steps(motion)
+    monkeypatch.setattr(module, "FRAME_CHUNK", 7)
+    np.testing.assert_array_equal(steps(motion).rotations, whole.rotations)
+
+
+def test_a_root_path_leaves_the_legs_free_to_step_but_given_legs_stay():
+    from choreo.constraints import Constraints
+
+    motion = glider()
+    constraints = Constraints.none(motion.num_frames, FPS)
+    constraints.root[:], constraints.root_known[:] = motion.root_positions, True  # a root path
+    constraints = constraints.fix_motion(motion.slice_frames(0, 10), joints=[4], root=False)  # and the left knee, 10 frames
+    fixed, legs = constraints.fixed_frames(), constraints.frames_fixing((1, 2, 4, 5, 7, 8))
+    assert fixed.all() and legs.sum() == 10
+    out = finish(motion, np.array([]), fixed, legs_fixed=legs)
+    np.testing.assert_array_equal(out.root_positions, motion.root_positions)
+    np.testing.assert_array_equal(out.rotations[legs], motion.rotations[legs])
+    assert stepping(out.joint_positions(), FPS).planted_share > stepping(motion.joint_positions(), FPS).planted_share + 0.2

@@ -137,6 +137,7 @@ def dance(
     """
     from .errors import ParameterError
     from .finishing import finish
+    from .finishing.steps import TURNED_JOINTS
     from .generator import GenerationRequest
     from .threads import use_threads
     from .music import BeatSource, Music
@@ -157,7 +158,8 @@ def dance(
     use_threads(threads)  # chosen now, beside whatever else runs now
     motion = backend.generate(request, progress=progress)
     frames = None if fixed is None else fixed.fixed_frames()
+    legs = None if fixed is None else fixed.frames_fixing(TURNED_JOINTS)
     finished = finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock,
-                      speed=finishing.speed_limit, footsteps=finishing.footsteps)
+                      speed=finishing.speed_limit, footsteps=finishing.footsteps, legs_fixed=legs)
     finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
     return finished

@@ -44,6 +44,11 @@ class Constraints:
         """(T,) bool: frames with any given value; re-timing must leave them where they are."""
         return self.joints_known.any(axis=1) | self.root_known.any(axis=1)
 
+    def frames_fixing(self, joints: Iterable[int]) -> np.ndarray:
+        """(T,) bool: frames where any of ``joints`` has a given rotation (a pass that turns only
+        those joints may change every other frame, root-path frames included)."""
+        return self.joints_known[:, list(joints)].any(axis=1)
+
     # -- adding constraints ---------------------------------------------------------------------
     def fix_motion(self, motion: Motion, at: int = 0, joints: Iterable[int] = ALL_JOINTS, root: bool = True,
                    frames: np.ndarray | None = None) -> "Constraints":

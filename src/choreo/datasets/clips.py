@@ -31,10 +31,20 @@ def place_on_floor(motion: Motion, percentile: float = 50.0) -> Motion:
     return motion.translated([0.0, -float(np.percentile(lowest, percentile)), 0.0])
 
 
-def leg_length(skeleton) -> float:
-    """Hip to ankle along the bones, averaged over both legs (metres)."""
+MIN_LEG_LENGTH = 0.01  # metres: shorter legs are a degenerate recording, not a body to scale a root path by
+
+
+def leg_length(skeleton, name: str = "skeleton") -> float:
+    """Hip to ankle along the bones, averaged over both legs (metres).
+
+    Root paths are divided by it, so legs of no length (every leg marker at one point, or a BVH
+    whose leg offsets are all zero) or of a non-finite one are refused here, in one line.
+    """
     lengths = skeleton.bone_lengths()
-    return float((lengths[4] + lengths[7] + lengths[5] + lengths[8]) / 2)
+    length = float((lengths[4] + lengths[7] + lengths[5] + lengths[8]) / 2)
+    if not (np.isfinite(length) and length >= MIN_LEG_LENGTH):
+        raise DatasetError(f"{name}: the legs have no usable length (hip to ankle {length:.3g} m)")
+    return length
 
 
 def retarget_root(root_positions: np.ndarray, source, target) -> np.ndarray:
@@ -43,4 +53,4 @@ def retarget_root(root_positions: np.ndarray, source, target) -> np.ndarray:
     Rotations carry over between skeletons unchanged; the root path must stretch with the legs,
     or a longer-legged body slides its feet and sinks into the floor.
     """
-    return root_positions * (leg_length(target) / leg_length(source))
+    return root_positions * (leg_length(target, "target") / leg_length(source, "source"))

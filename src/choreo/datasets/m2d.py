@@ -195,6 +195,7 @@ def fit_recording(recording: M2DRecording, config: IKConfig = IK_CONFIG) -> dict
     """
     targets, joints = recording.targets()
     skeleton = performer_skeleton(targets, joints)
+    leg_length(skeleton, recording.name)  # refuse a legless recording before the fit, not after
     result = fit_rotations(targets, joints, skeleton, config)
     with one_torch_thread():
         rotmats = quaternion_to_matrix(result.rotations)
@@ -232,7 +233,7 @@ def standard_motion(fit: dict[str, np.ndarray], fps: float, metadata: dict) -> M
     SMPL's leg length to the performer's, so steps keep their length relative to the legs.
     """
     performer = SMPL24.with_offsets(fit["offsets"])
-    root = fit["root_positions"] * (leg_length(SMPL24) / leg_length(performer))
+    root = fit["root_positions"] * (leg_length(SMPL24) / leg_length(performer, metadata.get("source", "M2D clip")))
     return Motion(root, fit["rotations"].astype(np.float64), fps=fps, skeleton=SMPL24, metadata=metadata)
 
 

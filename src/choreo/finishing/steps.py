@@ -21,11 +21,13 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..motion import Motion
+from ..motion.motion import FRAME_CHUNK
 from ..skeleton import SMPL24
 from ..skeleton import rotations as rot
 from ..skeleton.kinematics import global_rotations
 
 LEGS = ((1, 4, 7), (2, 5, 8))  # (hip, knee, ankle) of the left and the right leg in SMPL-24
+TURNED_JOINTS = tuple(joint for leg in LEGS for joint in leg)  # the only rotations the pass changes
 HORIZONTAL = np.array([1.0, 0.0, 1.0])  # Y is up
 
 
@@ -122,17 +124,31 @@ def steps(motion: Motion, fixed: np.ndarray | None = None, config: StepConfig = 
     if motion.num_frames < 3 or tuple(motion.skeleton.parents) != tuple(SMPL24.parents) or fixed.all():
         return motion  # another skeleton's legs are not where SMPL-24's are
     positions = motion.joint_positions()
-    local = motion.rotation_matrices()
-    world = global_rotations(local, motion.skeleton.parents)
     wanted = positions[:, [leg[2] for leg in LEGS]]
     weight = config.strength * fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
     targets = wanted + (plan_steps(wanted, motion.fps, config) - wanted) * weight
-    parents = motion.skeleton.parents
+    rotations = motion.rotations.copy()
+    for first in range(0, motion.num_frames, FRAME_CHUNK):  # a song's rotation matrices at once would be large
+        chunk = slice(first, first + FRAME_CHUNK)
+        rotations[chunk] = legs_reaching(motion.rotations[chunk], positions[chunk], targets[chunk],
+                                         motion.skeleton.parents)
+    rotations[fixed] = motion.rotations[fixed]  # exactly as given, not merely within rounding
+    return motion.replace(rotations=rotations, metadata=dict(motion.metadata))
+
+
+def legs_reaching(quaternions: np.ndarray, positions: np.ndarray, targets: np.ndarray, parents) -> np.ndarray:
+    """(T, J, 4) local rotations with each leg's hip, knee and ankle turned so its ankle reaches
+    ``targets`` (T, 2, 3), every foot keeping its world orientation."""
+    local = rot.quaternion_to_matrix(quaternions)
+    world = global_rotations(local, parents)
     for side, (hip, knee, ankle) in enumerate(LEGS):
         hip_world, knee_world = two_bone_ik(world, positions, (hip, knee, ankle), targets[:, side])
         local[:, hip] = np.swapaxes(world[:, parents[hip]], -1, -2) @ hip_world
         local[:, knee] = np.swapaxes(hip_world, -1, -2) @ knee_world
         local[:, ankle] = np.swapaxes(knee_world, -1, -2) @ world[:, ankle]  # the foot keeps its orientation
-    rotations = rot.matrix_to_quaternion(local)
-    rotations[fixed] = motion.rotations[fixed]  # exactly as given, not merely within rounding
-    return motion.replace(rotations=rotations, metadata=dict(motion.metadata))
+    out = quaternions.copy()
+    legs = list(TURNED_JOINTS)
+    turned = rot.matrix_to_quaternion(local[:, legs])
+    same_side = np.sign((turned * quaternions[:, legs]).sum(-1, keepdims=True) + 1e-12)  # q and -q: keep the input's sign
+    out[:, legs] = turned * same_side
+    return out

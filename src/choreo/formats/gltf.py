@@ -121,8 +121,9 @@ def _bone_segments(skeleton, bind_positions: np.ndarray) -> list[tuple[np.ndarra
 def _spindle(start: np.ndarray, end: np.ndarray, radius: float) -> np.ndarray:
     """(N, 3, 3) triangles of a double cone around start-end, widest a third of the way along."""
     axis = end - start
-    length = max(float(np.linalg.norm(axis)), 1e-6)
-    direction = axis / length
+    length = float(np.linalg.norm(axis))
+    # a bone of no length (a BVH with zero offsets) has no direction: any will do for a point-sized spindle
+    direction = axis / length if length > 1e-6 else np.array([0.0, 1.0, 0.0])
     helper = np.array([1.0, 0.0, 0.0]) if abs(direction[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     u = np.cross(direction, helper)
     u /= np.linalg.norm(u)

@@ -40,13 +40,29 @@ def _metadata(document: dict, path) -> dict:
     return metadata
 
 
+def _joint_names(document: dict, path) -> tuple[str, ...]:
+    """The file's joint names, refused unless a list of strings (writers and `info` treat them as text)."""
+    names = document["joint_names"]
+    if not (isinstance(names, list) and all(isinstance(name, str) for name in names)):
+        raise MotionFormatError(f"{path}: joint_names must be a list of strings")
+    return tuple(names)
+
+
+def _parents(document: dict, path) -> tuple[int, ...]:
+    """The parent indices, refused unless whole numbers (they index the joints)."""
+    parents = document["parents"]
+    if not (isinstance(parents, list) and all(type(p) is int for p in parents)):
+        raise MotionFormatError(f"{path}: parents must be a list of joint indices")
+    return tuple(parents)
+
+
 def read_json(path) -> Motion:
     try:
         with open(path, encoding="utf-8") as handle:
             document = json_arrays.loads(handle.read(), arrays_at=BULK_ARRAYS)
         if document.get("format") != FORMAT_NAME:
             raise MotionFormatError(f"{path}: not a choreo motion JSON (format field missing)")
-        skeleton = Skeleton(tuple(document["joint_names"]), tuple(document["parents"]), np.array(document["offsets"]))
+        skeleton = Skeleton(_joint_names(document, path), _parents(document, path), np.array(document["offsets"]))
         if skeleton.same_topology(SMPL24):
             skeleton = SMPL24.with_offsets(skeleton.offsets)
         return Motion.from_axis_angle(np.array(document["root_positions"], dtype=np.float64),
@@ -55,7 +71,7 @@ def read_json(path) -> Motion:
                                       metadata=_metadata(document, path))
     except MotionFormatError:
         raise
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, OverflowError) as error:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, OverflowError, IndexError) as error:
         raise MotionFormatError(f"{path}: malformed motion JSON ({type(error).__name__})") from None
     except ParameterError as error:  # values a motion cannot have (NaN, an fps outside 1-1000)
         raise MotionFormatError(f"{path}: {error}") from None

@@ -143,9 +143,14 @@ def get_rig(name: str | Rig | None) -> Rig | None:
 
 # -- rest-pose corrections ---------------------------------------------------------------------
 def shortest_arc(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(3, 3) rotation taking direction a onto direction b about their common normal (no twist)."""
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
+    """(3, 3) rotation taking direction a onto direction b about their common normal (no twist).
+
+    A zero vector (a bone of no length) has no direction to turn: the identity, not NaN.
+    """
+    norm_a, norm_b = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+    if not (norm_a > 1e-12 and norm_b > 1e-12):
+        return np.eye(3)
+    a, b = a / norm_a, b / norm_b
     axis = np.cross(a, b)
     s, c = np.linalg.norm(axis), float(np.dot(a, b))
     if s < 1e-12:
@@ -214,6 +219,9 @@ def _rig_rest(skeleton: Skeleton, rig: Rig, lengths: str) -> tuple[np.ndarray, n
         hip_height = _hip_height(rig.parents, offsets, end_sites)
         offsets = _with_lengths(offsets, rig.offsets)
         end_sites = {b: _with_lengths(v[None], np.asarray(rig.end_sites[b])[None])[0] for b, v in end_sites.items()}
+        if not (np.isfinite(hip_height) and hip_height > 1e-6):  # the root path is divided by it
+            raise MotionFormatError("the motion's legs have no length (the hips are not above the feet): "
+                                    "cannot scale its root path to the rig's")
         root_scale = _hip_height(rig.parents, offsets, end_sites) / hip_height
     return corrections, offsets, end_sites, root_scale
 
