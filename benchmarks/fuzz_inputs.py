@@ -151,7 +151,7 @@ def sgmd_seed(checkpoint: str | os.PathLike | None = None) -> bytes:
 
 def _train_tiny(folder: Path) -> Path:
     import torch
-    from choreo.music import FEATURE_DIM, RHYTHM_DIM
+    from choreo.music import FEATURE_DIM
     from choreo_sgmd.config import TrainConfig, model_config
     from choreo_sgmd.data import WindowTensors
     from choreo_sgmd.training import train
@@ -161,7 +161,7 @@ def _train_tiny(folder: Path) -> Path:
     motion[..., 4:7] = torch.stack([torch.sin(t), 0.9 + 0.05 * torch.sin(4 * t), torch.cos(t)], -1)
     motion[..., 7:] = torch.tensor([1.0, 0, 0, 0, 1, 0]).repeat(24) + 0.1 * torch.sin(3 * t)[:, None]
     g = torch.Generator().manual_seed(0)
-    data = WindowTensors(motion, torch.randn(4, 150, FEATURE_DIM + RHYTHM_DIM, generator=g), torch.eye(14)[:4],
+    data = WindowTensors(motion, torch.randn(4, 150, FEATURE_DIM, generator=g), torch.eye(14)[:4],  # the 35-d default
                          torch.ones(4, dtype=torch.bool))
     config = TrainConfig(batch_size=4, max_steps=1, validation_every=1, checkpoint_every=1, prompt_kind="onehot")
     return train(model_config("tiny", style_dim=14), config, data, None, folder / "tiny")

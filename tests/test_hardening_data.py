@@ -160,3 +160,12 @@ def test_a_bvh_with_zero_leg_offsets_converts_to_glb_and_mixamo(tmp_path):
     assert np.isfinite(read_motion(tmp_path / "out.bvh").joint_positions()).all()
     with pytest.raises(MotionFormatError, match="legs have no length"):
         retarget(legless, "mixamo", lengths="rig")
+
+
+def test_positions_too_far_to_fit_are_a_dataset_error(tmp_path):
+    folder = clip(tmp_path, frames=12)
+    data = json.loads((folder / "skeletons.json").read_text())
+    data["skeletons"][3][5][1] = 1e308  # finite, but it overflowed the Procrustes fit (SVD did not converge, or a hang)
+    (folder / "skeletons.json").write_text(json.dumps(data))
+    with pytest.raises(DatasetError, match="beyond"):
+        m2d.read_recording(folder)

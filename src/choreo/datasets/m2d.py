@@ -36,6 +36,7 @@ from ..errors import DatasetError, ParameterError
 from ..fileio import atomic_output
 from ..formats import json_arrays
 from ..motion import Motion
+from ..motion.motion import MAX_COORDINATE
 from ..skeleton import JOINT_NAMES, SMPL24, forward_kinematics, quaternion_to_matrix
 from .base import TEST, TRAIN, Clip, ProgressCallback
 from .cache import cache_dir, cached_music
@@ -171,6 +172,8 @@ def read_recording(folder: str | Path) -> M2DRecording:
                            f"{skeleton.shape} and {center.shape}")
     if not (np.isfinite(skeleton).all() and np.isfinite(center).all()):
         raise DatasetError(f"{folder.name}: NaN or infinite positions in skeletons.json")
+    if max(np.abs(skeleton).max(), np.abs(center).max()) > MAX_COORDINATE:  # 1e308 cm overflows every fit
+        raise DatasetError(f"{folder.name}: positions in skeletons.json beyond {MAX_COORDINATE:g} m")
     fps = SOURCE_FPS[genre]
     markers = skeleton + center[:, None]
     floor = floor_height(markers, fps)
