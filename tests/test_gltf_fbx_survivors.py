@@ -656,14 +656,28 @@ class Done:
 
 
 def fake_run(monkeypatch, outcome):
+    """Blender's child process replaced: it ends with ``outcome`` (a Done) or raises it."""
+    import contextlib
+
     calls = []
 
-    def run(command, **kwargs):
+    class Child:
+        returncode = None
+
+        def communicate(self, timeout):
+            calls[-1][1]["timeout"] = timeout
+            if isinstance(outcome, subprocess.TimeoutExpired):
+                raise outcome
+            self.returncode = outcome.returncode
+            return outcome.stdout, outcome.stderr
+
+    @contextlib.contextmanager
+    def child_process(command, **kwargs):
         calls.append((command, kwargs))
-        if isinstance(outcome, BaseException):
+        if isinstance(outcome, OSError):
             raise outcome
-        return outcome
-    monkeypatch.setattr(subprocess, "run", run)
+        yield Child()
+    monkeypatch.setattr(fbx, "child_process", child_process)
     return calls
 
 
@@ -672,8 +686,8 @@ def test_run_blender_call_is_headless_captured_and_time_limited(monkeypatch):
     fbx._run_blender(["blender", "--background"], 321.5)
     (command, kwargs), = calls
     assert command == ["blender", "--background"]
-    assert kwargs == {"capture_output": True, "text": True, "timeout": 321.5, "stdin": subprocess.DEVNULL,
-                      "errors": "replace"}
+    assert kwargs == {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE, "text": True, "timeout": 321.5,
+                      "stdin": subprocess.DEVNULL, "errors": "replace"}
 
 
 @pytest.mark.parametrize("outcome, message", [

@@ -72,10 +72,6 @@ def write_bvh(motion: Motion, handle, units: str = "m") -> None:
     if len(motion.skeleton.names) != 24 or motion.skeleton.parents != SMPL24.parents:
         raise MotionFormatError("BVH export supports the SMPL-24 skeleton only")
     check_joint_names(motion.skeleton.names, "BVH")
-    renamed = [name for name, smpl in zip(motion.skeleton.names, SMPL24.names) if name != smpl]
-    if renamed:  # the BVH reader finds SMPL-24's joints by name: a renamed one would not read back
-        raise MotionFormatError(f"joint name {ascii(renamed[0])[:60]} cannot be written to BVH: "
-                                "it needs SMPL-24's joint names")
     scale = UNIT_SCALE[units]
     text = io.StringIO()
     _write_hierarchy(text, motion.skeleton, scale)

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..children import child_process
 from ..errors import MotionFormatError, OutputError
 from ..motion import Motion
 from ..skeleton import SMPL24
@@ -91,14 +92,15 @@ def write_fbx_stream(motion: Motion, handle, rig: Rig | str | None = None) -> No
 
 def _run_blender(command: list[str], timeout: float) -> None:
     """Run Blender, turning a failure or a hang into one OutputError line with Blender's last words."""
-    try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=timeout,
-                              stdin=subprocess.DEVNULL, errors="replace")
+    try:  # child_process waits for Blender to be gone, also on Ctrl-C (subprocess.run waits 0.25 s then)
+        with child_process(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           stdin=subprocess.DEVNULL, errors="replace") as blender:
+            stdout, stderr = blender.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
         raise OutputError(f"Blender took longer than {timeout:.0f} s to write the FBX") from None
     except OSError as error:
         raise OutputError(f"cannot run Blender ({error.strerror or error})") from None
-    if done.returncode != 0:
-        lines = [line.strip() for line in (done.stderr + "\n" + done.stdout).splitlines() if line.strip()]
+    if blender.returncode != 0:
+        lines = [line.strip() for line in (stderr + "\n" + stdout).splitlines() if line.strip()]
         errors = [line for line in lines if "Error" in line] or lines
-        raise OutputError(f"Blender could not write the FBX: {errors[-1] if errors else f'exit {done.returncode}'}")
+        raise OutputError(f"Blender could not write the FBX: {errors[-1] if errors else f'exit {blender.returncode}'}")
