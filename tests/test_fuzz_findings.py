@@ -377,3 +377,17 @@ def test_joint_names_that_are_not_strings_are_refused_on_read(tmp_path, names):
 def test_float_parents_and_flat_rotations_in_motion_json_are_refused(tmp_path, changes):
     with pytest.raises(MotionFormatError, match="parents must be|malformed motion JSON"):
         read_motion(motion_json(tmp_path, **changes)).joint_positions()
+
+
+def test_a_renamed_smpl_skeleton_written_to_bvh_reads_back_as_smpl24(tmp_path):
+    """Found by the fuzzer (ROUNDTRIP): choreo wrote SMPL-24's tree under other joint names, then
+    refused the file as 'not SMPL-24'. Its tree, in SMPL-24's order, now says which joint is which."""
+    from choreo.skeleton import SMPL24
+
+    names = list(SMPL24.names)
+    names[0], names[9] = "other", "pine3"
+    renamed = read_motion(motion_json(tmp_path, joint_names=names))
+    write_motion(renamed, tmp_path / "out.bvh")
+    back = read_motion(tmp_path / "out.bvh")
+    assert back.skeleton.names == SMPL24.names
+    np.testing.assert_allclose(back.joint_positions(), renamed.joint_positions(), atol=1e-5)

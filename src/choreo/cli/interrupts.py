@@ -16,6 +16,8 @@ import threading
 from dataclasses import dataclass
 from typing import Iterator
 
+from ..children import defer_interrupt, starting_a_child
+
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 FORCE_AFTER = 3  # signals received: the last one is left to the system's default action
 
@@ -61,6 +63,9 @@ def signals_raise() -> Iterator[Received]:
             os.kill(os.getpid(), signum)
         if received.signum is None:
             received.signum = signum
+            if starting_a_child():  # raised once the child is held, so it is killed with the rest
+                defer_interrupt(Interrupted(signum))
+                return
             raise Interrupted(signum)
 
     before = {signum: signal.getsignal(signum) for signum in SIGNALS}

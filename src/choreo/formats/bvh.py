@@ -379,13 +379,27 @@ def _local_quaternions(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
     return quaternions, root
 
 
+def _index_by_tree(data: BvhData) -> dict[int, int] | None:
+    """File joint -> SMPL-24 joint when the file holds SMPL-24's tree in the order choreo writes it
+    (depth first), whatever the names; None otherwise."""
+    order = _depth_first_order(SMPL24)
+    if len(data.joints) != len(order):
+        return None
+    position = {smpl: k for k, smpl in enumerate(order)}
+    expected = [-1 if SMPL24.parents[smpl] < 0 else position[SMPL24.parents[smpl]] for smpl in order]
+    return dict(enumerate(order)) if [joint.parent for joint in data.joints] == expected else None
+
+
 def bvh_to_motion(data: BvhData, name: str = "BVH", units: str = "auto") -> Motion:
-    """Map a parsed BVH onto SMPL-24 (joint names as in SMPL, any order); other skeletons fail."""
+    """Map a parsed BVH onto SMPL-24 (joint names as in SMPL, any order; or SMPL-24's tree in its
+    order under other names, as choreo writes a renamed skeleton); other skeletons fail."""
     index = {}
     for j, joint in enumerate(data.joints):
         key = _normalise_joint_name(joint.name)
         if key in SMPL_NAME_INDEX and SMPL_NAME_INDEX[key] not in index.values():
             index[j] = SMPL_NAME_INDEX[key]
+    if len(index) != 24:
+        index = _index_by_tree(data) or index
     if len(index) != 24 or len(data.joints) != 24:
         listed = ", ".join(j.name for j in data.joints[:6]) + (", ..." if len(data.joints) > 6 else "")
         raise MotionFormatError(
