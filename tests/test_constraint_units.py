@@ -445,7 +445,7 @@ def test_path_limits_at_their_edges(tmp_path):
     ("x,z\n1,2\n", "a path needs at least two points"), ("1,2\n", "a path needs at least two points"),
     ("x,z\n1,2\n3,oops\n", "every value must be a number"), ("x,z\n1,2\n3\n", "every value must be a number"),
     (b"x,z\n1,2\n3,\xff\n", "every value must be a number"),
-    ("a,b\n1,2\n3,4\n", "header must name x and z .and optionally t, y., got a, b"),
+    ("a,b\n1,2\n3,4\n", "header must name x and z .and optionally t, y., got 'a, b'"),
     ("x,y\n1,2\n3,4\n", "header must name x and z"), ("z,t\n1,2\n3,4\n", "header must name x and z"),
     ("x,z,w\n1,2,3\n3,4,5\n", "header must name x and z"),
     ("1,2,3,4\n5,6,7,8\n", "without a header a path has 2 columns .x, z. or 3 .t, x, z., not 4"),

@@ -391,3 +391,29 @@ def test_a_renamed_smpl_skeleton_written_to_bvh_reads_back_as_smpl24(tmp_path):
     back = read_motion(tmp_path / "out.bvh")
     assert back.skeleton.names == SMPL24.names
     np.testing.assert_allclose(back.joint_positions(), renamed.joint_positions(), atol=1e-5)
+
+
+@pytest.mark.parametrize("rate", [2, 3999, 1_000_000])
+def test_a_wav_claiming_an_absurd_sample_rate_is_refused_at_once(tmp_path, rate):
+    """Found by the fuzzer (HANG): a 19 kB WAV whose header said 2 Hz was resampled into 80 minutes of song."""
+    import soundfile
+
+    from choreo.errors import AudioError
+    from choreo.music.audio import audio_duration
+
+    path = tmp_path / "odd.wav"
+    soundfile.write(path, np.zeros(9600, np.float32), rate)
+    with pytest.raises(AudioError, match=f"sample rate of {rate} Hz"):
+        audio_duration(path)
+
+
+def test_a_path_csv_header_with_a_newline_is_named_in_one_line(tmp_path):
+    """Found by the fuzzer (a two-line refusal): the header's cells were printed as they were."""
+    from choreo.constraints.parse import read_root_path
+    from choreo.errors import InputError
+
+    path = tmp_path / "path.csv"
+    path.write_bytes(b'"\xff\n0",1\n1,1,1\n')
+    with pytest.raises(InputError) as raised:
+        read_root_path(path)
+    assert "\n" not in str(raised.value)

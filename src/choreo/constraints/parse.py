@@ -141,7 +141,7 @@ def read_root_path(path: str | Path) -> tuple[np.ndarray | None, np.ndarray, np.
     else:
         columns = tuple("t" if c == "time" else c for c in header)
         if "x" not in columns or "z" not in columns or not set(columns) <= {"t", "x", "y", "z"}:
-            raise InputError(f"{path}: header must name x and z (and optionally t, y), got {', '.join(header)}")
+            raise InputError(f"{path}: header must name x and z (and optionally t, y), got {ascii(', '.join(header))[:80]}")
         body = rows[1:]
     try:
         values = np.array([[float(c) for c in row] for row in body], dtype=np.float64)

@@ -21,6 +21,7 @@ SUPPORTED_EXTENSIONS = (".wav", ".mp3", ".ogg", ".flac", ".opus")
 MIN_DURATION = 0.5  # seconds; shorter audio has no usable beat or feature window
 SILENCE_RMS = 1e-5  # below this (about -100 dBFS) a whole song counts as silent
 READ_BLOCK_SECONDS = 10.0
+MIN_SAMPLE_RATE, MAX_SAMPLE_RATE = 4000, 768_000  # Hz: outside, a header is damaged (2 Hz made 19 kB an 80-min song)
 MAX_SAMPLE = 1e4  # full scale is 1: a float WAV 80 dB over it is damaged, and would overflow the spectra
 
 
@@ -59,12 +60,17 @@ def _decoder_notes_silenced() -> Iterator[None]:
 def _open(path: Path) -> sf.SoundFile:
     try:
         with _decoder_notes_silenced():
-            return sf.SoundFile(os.fsencode(path))  # bytes: names that are not valid UTF-8 open too
+            handle = sf.SoundFile(os.fsencode(path))  # bytes: names that are not valid UTF-8 open too
     except Exception as error:  # libsndfile reports every decoding problem this way
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
         if "does not exist" in reason or "Error opening" in reason:  # libsndfile's words for a bad mp3 or text
             reason = "damaged, truncated or not audio"
         raise AudioError(f"{path} is not a readable audio file ({reason})") from None
+    if not MIN_SAMPLE_RATE <= handle.samplerate <= MAX_SAMPLE_RATE:
+        handle.close()
+        raise AudioError(f"{path} claims a sample rate of {handle.samplerate} Hz (music has "
+                         f"{MIN_SAMPLE_RATE}-{MAX_SAMPLE_RATE} Hz): a damaged header?")
+    return handle
 
 
 def audio_duration(path: str | os.PathLike) -> float:
