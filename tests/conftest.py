@@ -1,11 +1,18 @@
 """Shared fixtures: a tiny SGMD checkpoint trained in seconds on synthetic windows."""
 
+import os
+
 import numpy as np
 import pytest
 import torch
 
 from choreo.music import FEATURE_DIM
 from choreo_sgmd.data import WindowTensors
+
+# Dances with the same seed are equal only at the same thread count (float32 sums in another order),
+# and the thread policy (choreo.threads) follows the machine's load: tests comparing two runs pin it,
+# here and in every CLI process they start. tests/test_threads.py tests the policy itself.
+os.environ.setdefault("OMP_NUM_THREADS", "2")
 
 
 def synthetic_windows(count=4, frames=150, seed=0, music_dim=FEATURE_DIM) -> WindowTensors:

@@ -130,7 +130,8 @@ def test_sampling_flags_given_to_the_graph_are_refused_by_name(tmp_path, capsys)
 
 
 def test_footsteps_are_on_by_default_and_move_only_the_legs(tmp_path, capsys):
-    args = ("generate", EXAMPLE_SONG, "--steps", "2", "--no-beat-lock")
+    # one thread in both runs: the same seed's dance differs in the last float32 bits between thread counts
+    args = ("generate", EXAMPLE_SONG, "--steps", "2", "--no-beat-lock", "--threads", "1")
     assert run_cli(capsys, *args, "-o", tmp_path / "stepped.npz")[0] == 0
     assert run_cli(capsys, *args, "-o", tmp_path / "glide.npz", "--no-footsteps")[0] == 0
     stepped, glide = read_motion(tmp_path / "stepped.npz"), read_motion(tmp_path / "glide.npz")

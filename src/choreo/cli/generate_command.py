@@ -45,7 +45,8 @@ SPEED_LIMIT = typer.Option(True, "--speed-limit/--no-speed-limit",
 BPM = typer.Option(None, "--bpm", help="The song's tempo, if you know it (20-300): beats exactly 60/BPM s apart, "
                                        "placed on the song's onsets (default: the tracker's tempo).")
 THREADS = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs this job may use "
-                                                    "that other work leaves idle; OMP_NUM_THREADS is honoured).")
+                                                    "that other work leaves idle; OMP_NUM_THREADS is honoured). Set it "
+                                                    "for bit-identical reruns: other thread counts round differently.")
 BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
                                            "(time[,downbeat]) as DAWs and beat trackers export.")
 
