@@ -1,6 +1,9 @@
 """Shared fixtures: a tiny SGMD checkpoint trained in seconds on synthetic windows."""
 
+import importlib.util
 import os
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -57,3 +60,12 @@ def wandering_dance(seed: int, frames: int = 40, fps: float = 30.0):
     root = np.cumsum(rng.normal(scale=0.02, size=(frames, 3)), axis=0) + [0.3, 0.95, -0.2]
     skeleton = SMPL24.with_offsets(SMPL24.offsets * rng.uniform(0.9, 1.1, size=(24, 1)))
     return Motion.from_axis_angle(root, axis_angle, fps=fps, skeleton=skeleton)
+
+
+def load_script(path: Path):
+    """A benchmark script imported as a module (registered by name: its dataclasses look it up)."""
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[path.stem] = module
+    spec.loader.exec_module(module)
+    return module

@@ -2,22 +2,17 @@
 files of every format choreo reads are refused in one line or accepted, never an internal error,
 a hang or a memory blow-up. The long run is the benchmark script itself."""
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import load_script
 
 SCRIPT = Path(__file__).parents[1] / "benchmarks" / "fuzz_inputs.py"
 
 
 @pytest.fixture(scope="module")
 def fuzz():
-    spec = importlib.util.spec_from_file_location("fuzz_inputs", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["fuzz_inputs"] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    return module
+    return load_script(SCRIPT)
 
 
 def test_mutations_are_deterministic(fuzz):

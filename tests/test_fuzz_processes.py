@@ -3,22 +3,17 @@ choreo process interrupted at a random moment, or writing to an odd output targe
 (exit 0 with a complete output, or 130/143/2/3 with one line and nothing left behind). The long
 run is the benchmark script itself."""
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from conftest import load_script
 
 SCRIPT = Path(__file__).parents[1] / "benchmarks" / "fuzz_processes.py"
 
 
 @pytest.fixture(scope="module")
 def fuzz():
-    spec = importlib.util.spec_from_file_location("fuzz_processes", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["fuzz_processes"] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    return module
+    return load_script(SCRIPT)
 
 
 def test_four_cases_of_each_surface_are_clean(fuzz, tmp_path):
