@@ -1,6 +1,6 @@
 """Beat-rate lock on songs from outside M2D whose tempo is known (LMMS's demo songs).
 
-    python benchmarks/beat_lock.py [--seconds 60] [--m2d ../shared/data/m2d]   # needs `apt-get install lmms`
+    python benchmarks/beat_lock.py [--seconds 60] [--m2d ../shared/data/m2d] [--beats choreo|stated|madmom]   # needs `apt-get install lmms`
 
 Each song (a minute from 10 s in) is danced by both bundled generators with their defaults, and
 each dance is also scored after choreo.finishing's beat lock (side by side, same dance). How
@@ -11,7 +11,9 @@ the tempo and 100 % for perfect lock (pairs whose tempi are the same pulse are s
 same share for real dancers is the reference: M2D's clips against the tempo choreo's analysis
 hears in their music (M2D states no tempo); the generators are scored the same way on M2D's
 test songs, the music they were trained for. Also printed: how often that analysis hears the
-stated tempo of the outside songs (the generators dance to what it hears).
+stated tempo of the outside songs (the generators dance to what it hears). ``--beats stated``
+dances the outside songs to their stated tempo as a user who knows it would (``--bpm``), and
+``--beats madmom`` to madmom's beats everywhere (``--beat-tracker madmom``).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ import numpy as np
 from choreo.generator import GenerationRequest
 from choreo.finishing import beat_lock
 from choreo.metrics import beat_align_score, beat_autocorrelation, motion_beats, salience_at, same_pulse
-from choreo.music import Music, audio_duration
+from choreo.music import BeatSource, Music, audio_duration
 
 sys.path.insert(0, str(Path(__file__).parent))
 from outside_songs import outside_songs  # noqa: E402
@@ -51,6 +53,13 @@ def beat_profile(joint_positions: np.ndarray) -> np.ndarray:
 
 SGMD_CHECKPOINT: Path | None = None  # --sgmd-checkpoint: score another SGMD model than the bundled one
 SEED = 0  # --seed: another take of every dance (the lock shares move by several points from take to take)
+BEATS = "choreo"  # --beats: whose beats the songs are danced to (choreo's tracker, the stated tempo, madmom's)
+
+
+def beat_source(stated_bpm: float | None) -> BeatSource:
+    if BEATS == "stated" and stated_bpm is not None:
+        return BeatSource.from_options(bpm=stated_bpm)
+    return BeatSource.from_options(tracker="madmom" if BEATS == "madmom" else "choreo")
 
 
 def generators() -> dict:
@@ -86,7 +95,7 @@ def dance_outside_songs(seconds: float) -> list[Danced]:
     backends, danced = generators(), []
     for song in outside_songs():
         skip = SKIP_SECONDS if audio_duration(song.path) >= SKIP_SECONDS + 20 else 0.0
-        music = Music.from_file(song.path, start=skip, end=skip + seconds)
+        music = Music.from_file(song.path, start=skip, end=skip + seconds, beats=beat_source(song.bpm))
         danced.append(Danced(song.name, song.bpm, music.tempo, generated(backends, music, "outside songs")))
         print(f"danced {song.name} ({song.bpm:g} bpm, heard {music.tempo:.1f})", flush=True)
     return danced
@@ -98,7 +107,8 @@ def m2d_dancers(clips) -> list[Danced]:
 
     backends, danced = generators(), []
     for clip in (c for c in clips if c.audio_path):
-        music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
+        music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration,
+                                beats=beat_source(None))
         dances = {"real dancers": beat_profile(clip.motion.joint_positions())}
         if clip.split == TEST:
             BEAT_ALIGN.setdefault("real dancers (M2D test songs)", []).append(
@@ -158,9 +168,11 @@ def main() -> None:
     parser.add_argument("--m2d", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "data" / "m2d")
     parser.add_argument("--sgmd-checkpoint", type=Path, help="an SGMD checkpoint to score instead of the bundled one")
     parser.add_argument("--seed", type=int, default=0, help="the generators' seed (another take of every dance)")
+    parser.add_argument("--beats", choices=["choreo", "stated", "madmom"], default="choreo",
+                        help="dance to choreo's tracked beats, the outside songs' stated tempo (--bpm), or madmom's beats")
     args = parser.parse_args()
-    global SGMD_CHECKPOINT, SEED
-    SGMD_CHECKPOINT, SEED = args.sgmd_checkpoint, args.seed
+    global SGMD_CHECKPOINT, SEED, BEATS
+    SGMD_CHECKPOINT, SEED, BEATS = args.sgmd_checkpoint, args.seed, args.beats
     started = time.perf_counter()
     outside = dance_outside_songs(args.seconds)
     if not outside:

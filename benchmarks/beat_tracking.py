@@ -10,9 +10,10 @@ F-measure with a 70 ms window (mir_eval; beats in the first 5 s are left out).
 
 Trackers: choreo (choreo.music: 96 fps envelope, metrical tempo, percussive phase), choreo's
 previous tracker (30 fps envelope, tempogram tempo, the same dynamic programme), librosa's
-beat_track with its defaults, and librosa's PLP (peaks of the predominant local pulse).
+beat_track with its defaults, librosa's PLP (peaks of the predominant local pulse), and, where
+the madmom extra is installed, madmom's RNN + DBN (``--beat-tracker madmom``).
 ``--external FILE`` adds trackers that cannot be installed cleanly here, from a JSON of beat
-times per song stem ({"song": {"name_beats": [...]}}): BeatNet and madmom were measured that way.
+times per song stem ({"song": {"name_beats": [...]}}): BeatNet was measured that way.
 ``--m2d`` also prints real M2D dancers' BeatAlign against each choreo tracker's beats.
 """
 
@@ -28,7 +29,9 @@ import librosa
 import mir_eval
 import numpy as np
 
+from choreo.errors import ParameterError
 from choreo.music import Music, load_audio
+from choreo.music import madmom_tracker
 
 sys.path.insert(0, str(Path(__file__).parent))
 from outside_songs import outside_songs  # noqa: E402
@@ -70,8 +73,18 @@ def tempo_of(beats: np.ndarray) -> float:
     return 60.0 / float(np.median(np.diff(beats))) if len(beats) > 1 else 0.0
 
 
+def madmom_available() -> bool:
+    try:
+        madmom_tracker.load_madmom()
+    except ParameterError:
+        print("madmom not installed: its row is left out (pip install \"choreo[madmom]\")")
+        return False
+    return True
+
+
 def run(external: dict) -> dict[str, list]:
     rows: dict[str, list] = {}
+    with_madmom = madmom_available()
     for song in outside_songs():
         truth = np.arange(0.0, librosa.get_duration(path=song.path), 60.0 / song.bpm)
         samples = load_audio(song.path, 22050)
@@ -84,6 +97,10 @@ def run(external: dict) -> dict[str, list]:
             started = time.perf_counter()
             tempo, beats = tracker(arg)
             results[name] = (tempo, beats, time.perf_counter() - started + (seconds if name == "previous" else 0.0))
+        if with_madmom:
+            started = time.perf_counter()
+            beats = madmom_tracker.track_file(song.path)
+            results["madmom"] = (tempo_of(beats), beats, time.perf_counter() - started)
         for key, beats in external.get(song.path.stem, {}).items():
             if key.endswith("_beats"):
                 results[key.removesuffix("_beats")] = (tempo_of(np.asarray(beats)), np.asarray(beats), float("nan"))
@@ -103,12 +120,17 @@ def m2d_beat_align(data: str) -> None:
 
     clips = [c for c in load_dataset(data) if c.audio_path]
     scores: dict[str, list[float]] = {"choreo": [], "previous": []}
+    with_madmom = madmom_available()
     for clip in clips:
-        music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
+        start, end = clip.audio_offset, clip.audio_offset + clip.motion.duration
+        music = Music.from_file(clip.audio_path, start=start, end=end)
         dance = motion_beats(clip.motion.joint_positions())
-        for name, (_, beats) in (("choreo", (music.tempo, music.beat_times)), ("previous", previous_tracker(music))):
+        trackers = [("choreo", (music.tempo, music.beat_times)), ("previous", previous_tracker(music))]
+        if with_madmom:
+            trackers.append(("madmom", (None, madmom_tracker.track_file(clip.audio_path, start, end))))
+        for name, (_, beats) in trackers:
             frames = np.round(np.asarray(beats) * clip.motion.fps).astype(int)
-            scores[name].append(beat_align_score(frames, dance))
+            scores.setdefault(name, []).append(beat_align_score(frames, dance))
     for name, values in scores.items():
         print(f"M2D real motion BeatAlign, {name} tracker's beats: {np.mean(values):.4f} over {len(values)} clips")
 

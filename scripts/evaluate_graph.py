@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from choreo.datasets import TRAIN, load_dataset, select_split
-from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row
+from choreo.datasets import TEST, TRAIN, load_dataset, select_split
+from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row, windows_as_dances
+from choreo.metrics.stepping import root_speeds_by_genre
 from choreo_graph import DEFAULT_CHECKPOINT
 from choreo_graph.config import GraphConfig
 from choreo_graph.evaluation import clips_repertoire
@@ -95,6 +96,8 @@ def main() -> None:
 
     scoring = ScoringSet.from_clips(clips)
     mels = scoring.log_mels()
+    genres = [w.genre for w in scoring.windows]
+    real = [d.positions for d in windows_as_dances(select_split(clips, TEST))]
     print(selector_genre_precision(model, repertoire, scoring.windows, mels), flush=True)
     if args.whole_songs:
         print(whole_song_replays(generator, mels, args.top_k[0]), flush=True)
@@ -105,11 +108,12 @@ def main() -> None:
             for finished, footsteps in [(False, False), *([(True, False)] if args.finished and args.no_footsteps else []),
                                         *([(True, True)] if args.finished else [])]:
                 started = time.perf_counter()
-                report, _ = score_generator(generator, scoring, with_style=False, seed=args.seed, options=options, finished=finished,
+                report, dances = score_generator(generator, scoring, with_style=False, seed=args.seed, options=options, finished=finished,
                                             foot_lock=args.foot_lock, footsteps=footsteps)
                 label = (f"{variant}, K={top_k}{', finished' if finished else ''}{', no footsteps' if finished and not footsteps else ''} "
                          f"({time.perf_counter() - started:.0f} s)")
-                print(table_row(label, report), flush=True)
+                print(table_row(label, report)
+                      + f" <!-- {root_speeds_by_genre([d.positions for d in dances], real, genres, 30.0)} -->", flush=True)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ import torch
 from choreo.datasets import TEST, TRAIN, load_dataset, select_split
 from choreo import load_backend
 from choreo.metrics.genre import GenreClassifier
-from choreo.metrics.stepping import median_root_speed
+from choreo.metrics.stepping import root_speeds_by_genre
 from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score, score_generator, scoring_windows, table_row, windows_as_dances
 
 REPO = Path(__file__).resolve().parents[1]
@@ -83,20 +83,10 @@ def main() -> None:
                                                      footsteps=footsteps)
                     recognised = classifier.agreement([d.positions for d in dances], genres)
                     print(table_row(label + (", finished" if finished else "") + (", no footsteps" if finished and not footsteps else ""), report)
-                          + f" <!-- genre recognised {100 * recognised:.1f} %, {root_speeds(dances, genres, real)}, "
+                          + f" <!-- genre recognised {100 * recognised:.1f} %, {root_speeds_by_genre([d.positions for d in dances], [d.positions for d in real], genres, 30.0)}, "
                           f"{time.time() - started:.0f} s -->", flush=True)
                     if args.by_genre:
                         print_by_genre(label + (", finished" if finished else ""), windows, dances, train_clips)
-
-
-def root_speeds(dances, genres, real) -> str:
-    """Median horizontal root speed per genre, generated (real test windows), in m/s."""
-    parts = []
-    for genre in sorted(set(genres)):
-        mine = [d.positions for d, g in zip(dances, genres) if g == genre]
-        theirs = [d.positions for d, g in zip(real, genres) if g == genre]
-        parts.append(f"{genre} {median_root_speed(mine, 30.0):.2f} ({median_root_speed(theirs, 30.0):.2f})")
-    return "root m/s " + ", ".join(parts)
 
 
 def print_by_genre(label: str, windows, dances, train_clips) -> None:

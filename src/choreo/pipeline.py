@@ -123,6 +123,7 @@ def dance(
     bpm: float | None = None,
     beats: str | os.PathLike | None = None,
     threads: int | None = None,
+    beat_tracker: str = "choreo",
 ) -> "Motion":
     """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
 
@@ -132,7 +133,9 @@ def dance(
     (or a function building them from the analysed music) fix frames, joints or a root path.
     ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps.
     ``bpm`` (the tempo; the phase is still tracked) or ``beats`` (a file of beat times, see
-    choreo.music.beat_file) replace the tracked beats everywhere: features, beat lock, backend.
+    choreo.music.beat_file) replace the tracked beats everywhere: features, beat lock, backend;
+    ``beat_tracker="madmom"`` has madmom's trained tracker hear them (the madmom extra; its models
+    are CC BY-NC-SA 4.0, non-commercial).
     ``threads``: torch threads for the dance (default: the CPUs other work leaves idle, choreo.threads).
     """
     from .errors import ParameterError
@@ -144,9 +147,9 @@ def dance(
 
     check_request(generator if isinstance(generator, str) else generator.name, options or {},
                   constraints is not None)  # before any work
-    beat_source = BeatSource.from_options(bpm, beats)
-    if isinstance(song, Music) and (bpm is not None or beats is not None):
-        raise ParameterError("the music is already analysed: give bpm or beats to Music.from_file instead")
+    beat_source = BeatSource.from_options(bpm, beats, beat_tracker)
+    if isinstance(song, Music) and (bpm is not None or beats is not None or beat_tracker != "choreo"):
+        raise ParameterError("the music is already analysed: give its beats to Music.from_file instead")
     backend = PendingBackend(generator, checkpoint) if isinstance(generator, str) else generator
     music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress,
                                                                   log_mel=backend.listens_to_spectrum,

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from .generate_command import BEATS, BPM, beat_source
+from .generate_command import BEAT_TRACKER, BEATS, BPM, beat_source
 from .progress import progress_bar, stderr_console, stdout_console
 from .text import markup
 
@@ -28,25 +28,27 @@ def _require_file(path: Path) -> Path:
 
 def info(
     path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json, glb; - reads stdin) or an audio file."),
-    bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
 ) -> None:
     """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats).
 
-    A song's beats are the ones the dancing commands would use with the same --bpm or --beats.
+    A song's beats are the ones the dancing commands would use with the same --bpm, --beats or
+    --beat-tracker.
 
     Examples:
       choreo info dance.bvh
       choreo info examples/drum_and_bass_174bpm.wav
       choreo info song.mp3 --bpm 128                      # the beats choreo generate --bpm 128 dances to
+      choreo info song.mp3 --beat-tracker madmom          # madmom's beats (the madmom extra; non-commercial)
       choreo generate song.mp3 -o - -f npz | choreo info -
     """
     _require_file(path)
     from ..errors import ParameterError
 
     is_song = path.suffix.lower() in AUDIO_EXTENSIONS
-    if not is_song and (bpm is not None or beats is not None):
-        raise ParameterError("--bpm and --beats describe a song, not a motion file")
-    source = beat_source(bpm, beats) if is_song else None
+    if not is_song and (bpm is not None or beats is not None or beat_tracker != "choreo"):
+        raise ParameterError("--bpm, --beats and --beat-tracker describe a song, not a motion file")
+    source = beat_source(bpm, beats, beat_tracker) if is_song else None
     from rich.table import Table
 
     table = Table(show_header=False, box=None)

@@ -49,6 +49,9 @@ THREADS = typer.Option(None, "--threads", min=1, help="CPU threads to dance with
                                                     "for bit-identical reruns: other thread counts round differently.")
 BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
                                            "(time[,downbeat]) as DAWs and beat trackers export.")
+BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
+                            help="Who hears the beats: choreo (default, licence-clean) or madmom (pip install "
+                                 "\"choreo[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
 
 
 def generate(
@@ -66,7 +69,7 @@ def generate(
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
-    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
     threads: Optional[int] = THREADS,
     shard: Optional[str] = typer.Option(None, "--shard", help="With --out-dir: dance only shard K of N (K/N, 1-based) of the "
                                         "songs, e.g. 3/8 for a cluster array task; every song lands in exactly one shard."),
@@ -133,7 +136,7 @@ def generate(
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
                         beat_lock, foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps, style_guidance=style_guidance,
-                        beats=beat_source(bpm, beats), threads=threads)
+                        beats=beat_source(bpm, beats, beat_tracker), threads=threads)
     backend = load_backend(settings)
     summaries, failed = [], 0
     for song in songs:
@@ -165,7 +168,7 @@ def inbetween(
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
-    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
     threads: Optional[int] = THREADS,
 ) -> None:
     """Dance between given poses: the first and last frame and keyframes at given times.
@@ -197,7 +200,7 @@ def inbetween(
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
                         beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
-                        beats=beat_source(bpm, beats), threads=threads)
+                        beats=beat_source(bpm, beats, beat_tracker), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -210,7 +213,7 @@ def inpaint(
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
-    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
     threads: Optional[int] = THREADS,
 ) -> None:
     """Regenerate a time range and/or a set of joints of an existing dance; the rest is kept exactly.
@@ -237,7 +240,7 @@ def inpaint(
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
                         beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
-                        beats=beat_source(bpm, beats), threads=threads)
+                        beats=beat_source(bpm, beats, beat_tracker), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -248,7 +251,7 @@ def trajectory(
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
     format: Optional[str] = FORMAT, beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
-    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
     threads: Optional[int] = THREADS,
 ) -> None:
     """Dance along a root path on the floor, stretched over the whole song.
@@ -266,7 +269,7 @@ def trajectory(
     guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
                         beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
-                        beats=beat_source(bpm, beats), threads=threads)
+                        beats=beat_source(bpm, beats, beat_tracker), threads=threads)
     dance_one(load_backend(settings), song, output, settings, constraints)
 
 
@@ -293,11 +296,12 @@ class Settings:
     footsteps: bool = True  # finishing: the step planner (choreo.finishing.steps)
 
 
-def beat_source(bpm: float | None, beats: Path | None) -> BeatSource:
-    """The BeatSource of --bpm / --beats, checked (and the file read) before any work."""
+def beat_source(bpm: float | None, beats: Path | None, tracker: str = "choreo") -> BeatSource:
+    """The BeatSource of --bpm / --beats / --beat-tracker, checked (the file read, madmom found)
+    before any work."""
     from ..music.beat_source import BeatSource
 
-    return BeatSource.from_options(bpm, beats)
+    return BeatSource.from_options(bpm, beats, tracker)
 
 
 def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None,

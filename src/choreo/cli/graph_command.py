@@ -8,7 +8,7 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import (BEAT_LOCK, BEATS, BPM, CHECKPOINT, FOOT_LOCK, FOOTSTEPS, OUTPUT, RIG, SONG, SPEED_LIMIT, THREADS,
+from .generate_command import (BEAT_LOCK, BEAT_TRACKER, BEATS, BPM, CHECKPOINT, FOOT_LOCK, FOOTSTEPS, OUTPUT, RIG, SONG, SPEED_LIMIT, THREADS,
                                Settings, beat_source, dance_one, load_backend)
 from .progress import progress_bar, stderr_console
 from .text import markup
@@ -45,7 +45,7 @@ def graph_dance(
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
-    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS,
+    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
     threads: Optional[int] = THREADS,
 ) -> None:
     """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
@@ -61,7 +61,7 @@ def graph_dance(
     if top_k < 1 or (warp_smoothing is not None and warp_smoothing < 0):
         raise ParameterError("--top-k must be at least 1 and --warp-smoothing at least 0")
     settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
-                        speed_limit, beats=beat_source(bpm, beats), threads=threads, footsteps=footsteps)
+                        speed_limit, beats=beat_source(bpm, beats, beat_tracker), threads=threads, footsteps=footsteps)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
                            **({} if warp_smoothing is None else {"warp_smoothing": warp_smoothing}))
     dance_one(backend, song, output, settings)

@@ -89,6 +89,17 @@ def median_root_speed(dances: list[np.ndarray], fps: float) -> float:
     return float(np.median(np.concatenate(speeds))) if speeds else float("nan")
 
 
+def root_speeds_by_genre(dances: list[np.ndarray], real: list[np.ndarray], genres: list[str], fps: float) -> str:
+    """"root m/s cha-cha 0.32 (0.50), ...": the median horizontal root speed of each genre's
+    dances, real dancers' on the same windows in brackets."""
+    parts = []
+    for genre in sorted(set(genres)):
+        mine = [d for d, g in zip(dances, genres) if g == genre]
+        theirs = [d for d, g in zip(real, genres) if g == genre]
+        parts.append(f"{genre} {median_root_speed(mine, fps):.2f} ({median_root_speed(theirs, fps):.2f})")
+    return "root m/s " + ", ".join(parts)
+
+
 def _correlation(a: np.ndarray, b: np.ndarray) -> float:
     if a.std() < STEADY_SPEED or b.std() < STEADY_SPEED:
         return float("nan")

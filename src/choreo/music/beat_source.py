@@ -1,4 +1,5 @@
-"""Where a song's beats come from: the tracker, a tempo the user knows, or beat times they give.
+"""Where a song's beats come from: a tracker (choreo's own, or madmom's opt-in one), a tempo the
+user knows, or beat times they give.
 
 Why one value for it: the beats drive the features' beat column (what SGMD reads), the music's
 beat times and tempo, and through them the beat lock. A :class:`BeatSource` goes to the one
@@ -20,20 +21,33 @@ from .beat_file import BeatFile, read_beat_file
 from .beats import beats_at_tempo, estimate_beats
 
 MIN_BPM, MAX_BPM = 20.0, 300.0  # a tempo outside is a typo, not a dance
+TRACKERS = ("choreo", "madmom")  # choreo's own (licence-clean, the default); madmom's RNN (non-commercial)
 
 
 @dataclass(frozen=True, eq=False)
 class BeatSource:
-    """The tracker (neither field set), a tempo in bpm (phase still tracked), or given beats."""
+    """A tracker (neither bpm nor given set), a tempo in bpm (phase still tracked), or given beats."""
 
     bpm: float | None = None
     given: BeatFile | None = None
+    tracker: str = "choreo"  # whose tracker hears the beats when neither bpm nor given is set
 
     @classmethod
-    def from_options(cls, bpm: float | None = None, beats: str | os.PathLike | None = None) -> "BeatSource":
-        """The source for ``--bpm`` / ``--beats`` (both None: the tracker), checked before any work."""
+    def from_options(cls, bpm: float | None = None, beats: str | os.PathLike | None = None,
+                     tracker: str = "choreo") -> "BeatSource":
+        """The source for ``--bpm`` / ``--beats`` / ``--beat-tracker`` (default: choreo's tracker),
+        checked before any work (madmom: that it is installed)."""
         if bpm is not None and beats is not None:
             raise ParameterError("give --bpm or --beats, not both")
+        if tracker not in TRACKERS:
+            raise ParameterError(f"--beat-tracker must be one of {', '.join(TRACKERS)}, got {tracker!r}")
+        if tracker != "choreo":
+            if bpm is not None or beats is not None:
+                raise ParameterError("--bpm and --beats replace the tracker: give them without --beat-tracker")
+            from .madmom_tracker import load_madmom
+
+            load_madmom()
+            return cls(tracker=tracker)
         if bpm is not None:
             if not (math.isfinite(bpm) and MIN_BPM <= bpm <= MAX_BPM):
                 raise ParameterError(f"--bpm must be {MIN_BPM:g} to {MAX_BPM:g}, got {bpm:g}")
@@ -42,10 +56,23 @@ class BeatSource:
 
     @property
     def label(self) -> str:
-        """What a dance's metadata records: "tracked", "bpm N" or the beats file's name."""
+        """What a dance's metadata records: "tracked", "bpm N", the beats file's name, or madmom's
+        tracker with its licence."""
         if self.bpm is not None:
             return f"bpm {self.bpm:g}"
+        if self.tracker == "madmom":
+            from .madmom_tracker import LICENCE
+
+            return f"madmom ({LICENCE})"
         return self.given.name if self.given is not None else "tracked"
+
+    def heard(self, track) -> "BeatSource":
+        """This source with madmom's beats in it, ``track()`` giving them (seconds, the excerpt's
+        time); any other source as it is. Why here: madmom listens to the audio itself, at its own
+        sample rate, not to the onset envelopes the other sources are placed on."""
+        if self.tracker != "madmom" or self.given is not None:
+            return self
+        return replace(self, given=BeatFile(name="madmom", times=np.asarray(track(), dtype=np.float64)))
 
     def place(self, envelopes: np.ndarray, envelope_fps: float) -> tuple[float, np.ndarray]:
         """(tempo in bpm, beat times in seconds) for a song whose (2, H) onset envelopes
