@@ -20,6 +20,7 @@ import argparse
 from pathlib import Path
 
 from choreo.datasets import TRAIN, load_dataset
+from choreo.finishing.steps import steps
 from choreo.finishing.speed_limit import REAL_FLOOR_STEP, REAL_JOINT_SPEED, REFERENCE_FPS, speed_limit
 from choreo.generator import GenerationRequest
 from choreo.music import Music
@@ -39,6 +40,7 @@ def main() -> None:
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--out", default=str(DEFAULT_REPERTOIRE))
     parser.add_argument("--checkpoint", default=str(DEFAULT_CHECKPOINT))
+    parser.add_argument("--footsteps", action="store_true", help="cut the clips from dances the step planner has finished")
     args = parser.parse_args()
     sgmd = SGMDGenerator(SGMD_CHECKPOINT)
     clips = sorted((c for c in load_dataset(args.data) if c.split == TRAIN and c.audio_path), key=lambda c: c.name)
@@ -47,6 +49,8 @@ def main() -> None:
         for clip in [c for c in clips if c.genre == genre][:SONGS_PER_GENRE]:
             music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
             motion = speed_limit(sgmd.generate(GenerationRequest(music, style=genre, seed=0, options=SAMPLING)))
+            if args.footsteps:
+                motion = steps(motion)
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
     repertoire = build_repertoire_file(dances, args.out, "bundled SGMD generations (M2D train songs)", stride=60,
