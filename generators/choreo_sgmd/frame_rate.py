@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from choreo.motion.motion import FRAME_CHUNK
 from choreo.music import BEAT_COLUMN, PEAK_COLUMN
 
 EVENT_COLUMNS = (PEAK_COLUMN, BEAT_COLUMN)  # one-hot columns of the 35-d features (the rhythm channels come after)
@@ -66,4 +67,8 @@ def frames_at_full_rate(vectors: np.ndarray, stride: int, num_frames: int) -> np
     lower = np.floor(position).astype(int)
     upper = np.minimum(lower + 1, vectors.shape[-2] - 1)
     weight = (position - lower)[:, None].astype(vectors.dtype)
-    return vectors[..., lower, :] * (1 - weight) + vectors[..., upper, :] * weight
+    out = np.empty((*vectors.shape[:-2], num_frames, vectors.shape[-1]), np.result_type(vectors.dtype, weight.dtype))
+    for first in range(0, num_frames, FRAME_CHUNK):  # a chunk at a time: an hour's temporaries would be large
+        chunk = slice(first, first + FRAME_CHUNK)
+        out[..., chunk, :] = vectors[..., lower[chunk], :] * (1 - weight[chunk]) + vectors[..., upper[chunk], :] * weight[chunk]
+    return out

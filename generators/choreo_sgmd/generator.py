@@ -117,10 +117,12 @@ class SGMDGenerator(Generator):
         x0, evaluations = sample_long(self.model, self.schedule, music, style, keep_style, self.model_config.frame_dim,
                                       self.model_config.window_frames, options, progress, inpainting)
         vectors = self.at_full_rate(self.normalizer.denormalize(x0).numpy(), num_frames)
+        del x0  # an hour's samples: not kept while the motion is built
         if known is not None:  # exact, not merely within float32 normalisation error
             values, mask = known
             vectors[mask] = values[mask]
         motion, _ = vector_to_motion(vectors, fps=request.music.fps)
+        del vectors
         motion.metadata = {
             "generator": "sgmd", "checkpoint": self.checkpoint.name, "style": request.style,
             "genre": genres[0] if len(genres) == 1 else (",".join(g or "free text" for g in genres) or None),

@@ -159,10 +159,12 @@ def dance(
     fixed = constraints(music) if callable(constraints) else constraints
     request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
     use_threads(threads)  # chosen now, beside whatever else runs now
-    motion = backend.generate(request, progress=progress)
     frames = None if fixed is None else fixed.fixed_frames()
     legs = None if fixed is None else fixed.frames_fixing(TURNED_JOINTS)
-    finished = finish(motion, music.beat_frames, frames, beat=finishing.beat_lock, foot=finishing.foot_lock,
-                      speed=finishing.speed_limit, footsteps=finishing.footsteps, legs_fixed=legs)
+    # The backend's dance goes straight into finish, which lets go of it after the first pass: an
+    # hour's raw dance kept here beside the finished one would add to the peak memory.
+    finished = finish(backend.generate(request, progress=progress), music.beat_frames, frames,
+                      beat=finishing.beat_lock, foot=finishing.foot_lock, speed=finishing.speed_limit,
+                      footsteps=finishing.footsteps, legs_fixed=legs)
     finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
     return finished

@@ -75,6 +75,7 @@ def beat_lock(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray |
     if pairs and config.refinements:
         source = refined_warp(positions, pairs, fixed, source, config)
     on_target = beats_on_target(positions_at(positions, source), pairs) if pairs else 0
+    del positions  # before the re-timed rotations are built
     warped = motion.sample_frames(source)
     warped.root_positions[fixed] = motion.root_positions[fixed]  # exactly as given, not re-interpolated
     warped.rotations[fixed] = motion.rotations[fixed]
@@ -124,7 +125,12 @@ def landed_beats(joint_positions: np.ndarray, targets: np.ndarray) -> np.ndarray
     beats = motion_beats(joint_positions)
     if len(beats) == 0:
         return np.full(len(targets), np.inf)
-    return beats[np.abs(beats[None, :] - targets[:, None]).argmin(axis=1)].astype(np.float64)
+    # The beats ascend, so the nearest is the first at or after the target or the one before it (the
+    # earlier on a tie); a (targets x beats) table of distances would take gigabytes on an hour's song.
+    after = np.minimum(np.searchsorted(beats, targets), len(beats) - 1)
+    before = np.maximum(after - 1, 0)
+    earlier = np.abs(beats[before] - targets) <= np.abs(beats[after] - targets)
+    return np.where(earlier, beats[before], beats[after]).astype(np.float64)
 
 
 def feasible_aims(pairs: list[tuple[int, int]], aims: np.ndarray, wanted: np.ndarray,

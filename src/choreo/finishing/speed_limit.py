@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..motion import Motion
+from ..motion.motion import FRAME_CHUNK
 
 REFERENCE_FPS = 30.0
 REAL_JOINT_SPEED = 10.39  # m/s: real M2D's fastest 0.1 % of frames (any joint) start here
@@ -48,8 +49,13 @@ def speed_limit(motion: Motion, fixed: np.ndarray | None = None, config: SpeedLi
             break
         root[chosen[:, None], [0, 2]] = smoothed(root[:, [0, 2]], chosen)
     rotations = motion.rotations.copy()
-    positions = motion.replace(root_positions=root).joint_positions()
-    speed = step_lengths(positions).max(-1) * motion.fps  # (T-1,), kept up to date where frames move
+    positions = np.empty((motion.num_frames, motion.num_joints, 3))
+    for first in range(0, motion.num_frames, FRAME_CHUNK):  # a chunk at a time: no second copy of a song's rotations
+        chunk = slice(first, first + FRAME_CHUNK)
+        positions[chunk] = motion.replace(root_positions=root[chunk], rotations=motion.rotations[chunk]).joint_positions()
+    speed = np.concatenate([step_lengths(positions[first: first + FRAME_CHUNK + 1]).max(-1)  # a chunk at a time
+                            for first in range(0, motion.num_frames - 1, FRAME_CHUNK)]) * motion.fps
+    # (T-1,), kept up to date where frames move
     for _ in range(config.max_passes):
         chosen = frames_around(speed > config.joint_speed, movable, config.reach)
         if not len(chosen):
@@ -59,6 +65,7 @@ def speed_limit(motion: Motion, fixed: np.ndarray | None = None, config: SpeedLi
         positions[chosen] = motion.replace(root_positions=root[chosen], rotations=rotations[chosen]).joint_positions()
         steps = np.unique(np.concatenate([chosen - 1, chosen]))  # the steps into and out of moved frames
         speed[steps] = np.linalg.norm(positions[steps + 1] - positions[steps], axis=-1).max(-1) * motion.fps
+    del positions  # before the new motion's checks copy the rotations once more
     return motion.replace(root_positions=root, rotations=rotations, metadata=dict(motion.metadata))
 
 

@@ -133,6 +133,7 @@ def steps(motion: Motion, fixed: np.ndarray | None = None, config: StepConfig = 
         rotations[chunk] = legs_reaching(motion.rotations[chunk], positions[chunk], targets[chunk],
                                          motion.skeleton.parents)
     rotations[fixed] = motion.rotations[fixed]  # exactly as given, not merely within rounding
+    del positions, targets  # before the new motion's checks copy the rotations once more
     return motion.replace(rotations=rotations, metadata=dict(motion.metadata))
 
 

@@ -14,7 +14,7 @@ from .safe_arrays import load_npy
 
 
 def write_npy(motion: Motion, handle) -> None:
-    np.save(handle, motion.joint_positions().astype(np.float32), allow_pickle=False)
+    np.save(handle, motion.joint_positions(np.float32), allow_pickle=False)
 
 
 def read_npy_joint_positions(path) -> np.ndarray:

@@ -24,7 +24,7 @@ DEFAULT_FPS = 30.0
 def write_npz(motion: Motion, handle) -> None:
     arrays = motion_to_smpl_params(motion)
     arrays["fps"] = np.array(motion.fps, dtype=np.float64)
-    arrays["joint_positions"] = motion.joint_positions().astype(np.float32)
+    arrays["joint_positions"] = motion.joint_positions(np.float32)
     arrays["offsets"] = motion.skeleton.offsets.astype(np.float64)
     arrays["metadata"] = np.array(json.dumps(motion.metadata, default=str))
     np.savez(handle, **arrays)

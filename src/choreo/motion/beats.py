@@ -11,7 +11,10 @@ SPEED_SMOOTHING_SIGMA = 5.0  # frames, as in the reference code
 
 def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
     """(T-1,) mean over joints of |p[t+1] - p[t]| (metres per frame)."""
-    return np.linalg.norm(np.diff(joint_positions, axis=0), axis=-1).mean(axis=-1)
+    from .motion import FRAME_CHUNK
+
+    return np.concatenate([np.linalg.norm(np.diff(joint_positions[first: first + FRAME_CHUNK + 1], axis=0), axis=-1).mean(axis=-1)
+                           for first in range(0, max(len(joint_positions) - 1, 1), FRAME_CHUNK)])  # a chunk at a time
 
 
 def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:

@@ -118,13 +118,17 @@ class Motion:
         return rot.quaternion_to_matrix(self.rotations)
 
     def axis_angle(self) -> np.ndarray:
-        """(T, J, 3) local rotations as rotation vectors."""
-        return rot.quaternion_to_axis_angle(self.rotations)
-
-    def joint_positions(self) -> np.ndarray:
-        """(T, J, 3) world joint positions by forward kinematics, a chunk of frames at a time
-        (an hour of dance would otherwise hold gigabytes of rotation matrices at once)."""
+        """(T, J, 3) local rotations as rotation vectors (a chunk of frames at a time, as joint_positions)."""
         out = np.empty((self.num_frames, self.num_joints, 3))
+        for first in range(0, self.num_frames, FRAME_CHUNK):
+            out[first: first + FRAME_CHUNK] = rot.quaternion_to_axis_angle(self.rotations[first: first + FRAME_CHUNK])
+        return out
+
+    def joint_positions(self, dtype=np.float64) -> np.ndarray:
+        """(T, J, 3) world joint positions by forward kinematics, a chunk of frames at a time
+        (an hour of dance would otherwise hold gigabytes of rotation matrices at once); ``dtype``
+        float32 rounds each chunk as it is done (as ``.astype(np.float32)`` would, without a float64 copy)."""
+        out = np.empty((self.num_frames, self.num_joints, 3), dtype)
         for first in range(0, self.num_frames, FRAME_CHUNK):
             chunk = slice(first, first + FRAME_CHUNK)
             out[chunk] = forward_kinematics(rot.quaternion_to_matrix(self.rotations[chunk]), self.root_positions[chunk],
@@ -193,10 +197,13 @@ class Motion:
         upper = np.minimum(lower + 1, self.num_frames - 1)
         weight = source_time - lower
         root = (1 - weight)[:, None] * self.root_positions[lower] + weight[:, None] * self.root_positions[upper]
-        rotations = rot.quaternion_slerp(
-            self.rotations[lower], self.rotations[upper],
-            np.broadcast_to(weight[:, None], (len(source_time), self.num_joints)).copy(),
-        )
+        rotations = np.empty((len(source_time), self.num_joints, 4))
+        for first in range(0, len(source_time), FRAME_CHUNK):  # a song's slerp temporaries at once would be large
+            chunk = slice(first, first + FRAME_CHUNK)
+            rotations[chunk] = rot.quaternion_slerp(
+                self.rotations[lower[chunk]], self.rotations[upper[chunk]],
+                np.broadcast_to(weight[chunk, None], (len(weight[chunk]), self.num_joints)).copy(),
+            )
         return self.replace(root_positions=root, rotations=rotations, metadata=dict(self.metadata))
 
     def translated(self, offset: Sequence[float]) -> "Motion":
@@ -213,7 +220,11 @@ def positions_at(joint_positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """(len(frames), J, 3) joints at fractional ``frames`` (clipped to the motion), linearly
     interpolated: cheap where speeds, not rotations, are what is read."""
     frames = np.clip(np.asarray(frames, dtype=np.float64), 0, len(joint_positions) - 1)
-    lower = np.floor(frames).astype(int)
-    upper = np.minimum(lower + 1, len(joint_positions) - 1)
-    weight = (frames - lower)[:, None, None]
-    return (1 - weight) * joint_positions[lower] + weight * joint_positions[upper]
+    out = np.empty((len(frames), *joint_positions.shape[1:]), np.result_type(joint_positions, np.float64))
+    for first in range(0, len(frames), FRAME_CHUNK):  # a chunk at a time: the temporaries of a song are large
+        chunk = frames[first: first + FRAME_CHUNK]
+        lower = np.floor(chunk).astype(int)
+        upper = np.minimum(lower + 1, len(joint_positions) - 1)
+        weight = (chunk - lower)[:, None, None]
+        out[first: first + FRAME_CHUNK] = (1 - weight) * joint_positions[lower] + weight * joint_positions[upper]
+    return out

@@ -31,13 +31,14 @@ def vector_to_motion(vectors: np.ndarray, fps: float = DEFAULT_FPS, **kwargs) ->
     Any 6 numbers per joint decode to a valid rotation (Gram-Schmidt), so model output needs no
     clean-up before it becomes a motion.
     """
-    vectors = np.asarray(vectors, dtype=np.float64)
+    vectors = np.asarray(vectors)  # in float64 a chunk at a time: a whole song's copy would be large
     if vectors.ndim != 2 or vectors.shape[1] != FRAME_DIM:
         raise ParameterError(f"frame vectors must have shape (T, {FRAME_DIM}), got {vectors.shape}")
-    rot6d = vectors[:, ROTATION_SLICE].reshape(len(vectors), 24, 6)
     quaternions = np.zeros((len(vectors), 24, 4))
     for first in range(0, len(vectors), FRAME_CHUNK):  # chunks bound the matrices' memory on long songs
         chunk = slice(first, first + FRAME_CHUNK)
-        quaternions[chunk] = rot.matrix_to_quaternion(rot.rot6d_to_matrix(rot6d[chunk]))
-    motion = Motion(vectors[:, ROOT_SLICE], quaternions, fps=fps, **kwargs)
-    return motion, vectors[:, CONTACT_SLICE]
+        rot6d = np.asarray(vectors[chunk, ROTATION_SLICE], dtype=np.float64).reshape(-1, 24, 6)
+        quaternions[chunk] = rot.matrix_to_quaternion(rot.rot6d_to_matrix(rot6d))
+    root = np.array(vectors[:, ROOT_SLICE], dtype=np.float64)
+    motion = Motion(root, quaternions, fps=fps, **kwargs)
+    return motion, np.array(vectors[:, CONTACT_SLICE], dtype=np.float64)
