@@ -5,7 +5,7 @@ import pytest
 
 from choreo.errors import ParameterError
 from choreo.finishing import BeatLockConfig, beat_lock, lock_warp
-from choreo.finishing.beat_lock import free_spans
+from choreo.finishing.beat_lock import free_spans, landed_beats
 from choreo.metrics import beat_align_score, motion_beats
 from choreo.motion import Motion
 from choreo.skeleton import rotations as rot
@@ -135,3 +135,21 @@ def test_retimed_spans_follow_the_warp():
     faster = np.minimum(np.arange(50) * 2.0, 99)  # twice as fast: 10..29 over 5..14
     assert retimed_span([10, 29], faster) == [5, 14]
     assert retimed_span([90, 99], faster) == [45, 49]
+
+
+def test_landed_beats_are_the_nearest_motion_beats_earlier_on_a_tie(monkeypatch):
+    """The binary search (an hour's song would need a targets x beats table) picks what a full
+    table's argmin picks, ties to the earlier beat included."""
+    import sys
+
+    module = sys.modules["choreo.finishing.beat_lock"]  # the package's name beat_lock is the function
+
+    rng = np.random.default_rng(0)
+    for case in range(300):
+        beats = np.unique(rng.integers(0, 400, size=rng.integers(1, 40)))
+        targets = np.concatenate([rng.uniform(-50, 450, size=30), (beats[:-1] + beats[1:]) / 2])  # ties too
+        monkeypatch.setattr(module, "motion_beats", lambda _: beats)
+        expected = beats[np.abs(beats[None, :] - targets[:, None]).argmin(axis=1)]
+        np.testing.assert_array_equal(landed_beats(None, targets), expected)
+    monkeypatch.setattr(module, "motion_beats", lambda _: np.array([], int))
+    assert np.isinf(landed_beats(None, np.array([3.0, 7.0]))).all()
