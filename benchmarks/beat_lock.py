@@ -63,13 +63,9 @@ def beat_source(stated_bpm: float | None) -> BeatSource:
 
 
 def generators() -> dict:
-    import choreo_graph
-    import choreo_sgmd
-    from choreo_graph.generator import ChoreoGraphGenerator
-    from choreo_sgmd.generator import SGMDGenerator
+    from choreo import load_backend
 
-    return {"SGMD": SGMDGenerator(SGMD_CHECKPOINT or choreo_sgmd.DEFAULT_CHECKPOINT),
-            "ChoreoGraph": ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT)}
+    return {"SGMD": load_backend("sgmd", SGMD_CHECKPOINT), "ChoreoGraph": load_backend("graph")}
 
 
 LOCK_SECONDS: list[tuple[float, float]] = []  # (seconds the beat lock took, seconds of dance)

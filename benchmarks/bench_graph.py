@@ -19,18 +19,17 @@ from pathlib import Path
 
 import torch
 
-from choreo.generator import GenerationRequest
+from choreo import load_backend
+from choreo.generator import GenerationRequest, Generator
 from choreo.music import Music
 from choreo.music.mel import music_log_mel
 from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE
-from choreo_graph.config import GraphConfig
-from choreo_graph.generator import ChoreoGraphGenerator
 
 sys.path.insert(0, str(Path(__file__).parent))
 from common import TARGET_SECONDS, cli_peak_rss, write_song  # noqa: E402
 
 
-def speed(generator: ChoreoGraphGenerator, top_ks: list[int], durations: list[float], folder: Path) -> None:
+def speed(generator: Generator, top_ks: list[int], durations: list[float], folder: Path) -> None:
     print(f"\n## Speed ({torch.get_num_threads()} threads, repertoire of {len(generator.repertoire)} clips)\n")
     print("| song | K | log-mel (s) | dance (s) | total (s) | x 3 s target (60 s song) | without repeat cost (s) | ratio |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
@@ -40,20 +39,19 @@ def speed(generator: ChoreoGraphGenerator, top_ks: list[int], durations: list[fl
         music_log_mel(music)
         mel_seconds = time.perf_counter() - started
         for top_k in top_ks:
-            total = timed(generator, GraphConfig(top_k=top_k), music)
-            plain = timed(generator, GraphConfig(top_k=top_k, repeat_cost=0.0), music)
+            total = timed(generator, {"top_k": top_k}, music)
+            plain = timed(generator, {"top_k": top_k, "repeat_cost": 0.0}, music)
             ratio = f"{total / TARGET_SECONDS:.2f}" if seconds == 60 else "-"
             print(f"| {seconds:g} s | {top_k} | {mel_seconds:.2f} | {total - mel_seconds:.2f} | {total:.2f} | {ratio} "
                   f"| {plain:.2f} | {total / plain:.2f} |", flush=True)
 
 
-def timed(generator: ChoreoGraphGenerator, config: GraphConfig, music: Music, repeats: int = 2) -> float:
+def timed(generator: Generator, options: dict, music: Music, repeats: int = 2) -> float:
     """Best of ``repeats`` runs (the first run in a process also pays one-off start-up)."""
-    generator.config = config
     best = float("inf")
     for _ in range(repeats):
         started = time.perf_counter()
-        generator.generate(GenerationRequest(music))
+        generator.generate(GenerationRequest(music, options=options))
         best = min(best, time.perf_counter() - started)
     return best
 
@@ -75,7 +73,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, nargs="+", default=[10, 60, 300])
     parser.add_argument("--memory-minutes", type=float, nargs="*", default=[1, 10])
     args = parser.parse_args()
-    generator = ChoreoGraphGenerator.from_files(args.checkpoint, args.repertoire)
+    generator = load_backend("graph", args.checkpoint, repertoire=args.repertoire)
     with tempfile.TemporaryDirectory() as folder:
         speed(generator, args.top_k, args.seconds, Path(folder))
         if args.memory_minutes:

@@ -21,10 +21,10 @@ from pathlib import Path
 
 import torch
 
-from choreo.generator import GenerationRequest
+from choreo import load_backend
+from choreo.generator import GenerationRequest, Generator
 from choreo.music import Music
 from choreo_sgmd import DEFAULT_CHECKPOINT
-from choreo_sgmd.generator import SGMDGenerator
 
 sys.path.insert(0, str(Path(__file__).parent))
 from common import REPO, TARGET_SECONDS, cli_peak_rss, song_of, write_song  # noqa: E402
@@ -33,7 +33,7 @@ from common import REPO, TARGET_SECONDS, cli_peak_rss, song_of, write_song  # no
 GUIDANCE_PAIRS = ((1.0, 1.0), (2.0, 1.0), (2.0, 2.0))  # (music, style): none, music only, both
 
 
-def speed(generator: SGMDGenerator, steps_list: list[int]) -> None:
+def speed(generator: Generator, steps_list: list[int]) -> None:
     audio, rate = song_of(60.0)
     started = time.perf_counter()
     music = Music.from_array(audio, rate)
@@ -72,7 +72,7 @@ def quality(checkpoint: Path, steps_list: list[int]) -> None:
     if not data.is_dir():
         print(f"\n(quality skipped: {data} not found)")
         return
-    generator = SGMDGenerator(checkpoint)
+    generator = load_backend("sgmd", checkpoint)
     scoring = ScoringSet.from_clips(load_dataset(data))
     print("\n## Quality against the number of DDIM steps (M2D test windows, guidance 2)\n")
     print(TABLE_HEADER.format(label="steps"))
@@ -90,7 +90,7 @@ def main() -> None:
     parser.add_argument("--memory-minutes", type=float, nargs="*", default=[1, 10],
                         help="song lengths for the peak-RSS runs (none to skip), e.g. 1 10 60")
     args = parser.parse_args()
-    generator = SGMDGenerator(args.checkpoint)
+    generator = load_backend("sgmd", args.checkpoint)
     print(f"checkpoint {args.checkpoint.name}: {generator.trained_steps} training steps")
     speed(generator, args.steps)
     if args.memory_minutes:

@@ -30,10 +30,7 @@ def fastest_joint(positions: np.ndarray, fps: float) -> np.ndarray:
 
 
 def main() -> None:
-    import choreo_graph
-    import choreo_sgmd
-    from choreo_graph.generator import ChoreoGraphGenerator
-    from choreo_sgmd.generator import SGMDGenerator
+    from choreo import load_backend
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=10.0)
@@ -51,8 +48,7 @@ def main() -> None:
     print(f"song: {args.minutes:g} min, heard at {music.tempo:.1f} bpm")
     print("| generator | dance | BeatAlign | PFC | mean jerk (mm/frame^3) | fastest joint (m/s) | frames above real 99.9 % |")
     print("| --- | --- | ---: | ---: | ---: | ---: | ---: |")
-    for name, backend in (("SGMD", SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT)),
-                          ("ChoreoGraph", ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT))):
+    for name, backend in (("SGMD", load_backend("sgmd")), ("ChoreoGraph", load_backend("graph"))):  # the bundled models
         raw = backend.generate(GenerationRequest(music, seed=0))
         started = time.perf_counter()
         limited = speed_limit(raw)

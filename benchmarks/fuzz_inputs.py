@@ -139,22 +139,20 @@ def m2d_config_seeds() -> list[bytes]:
 def sgmd_seed(checkpoint: str | os.PathLike | None = None) -> bytes:
     """A tiny inference checkpoint: from ``checkpoint`` if given, else one training step of the
     tiny preset on synthetic windows (a few seconds); never the 23 MB training state."""
-    from choreo_sgmd.checkpoint import inference_state, load_checkpoint, save_checkpoint
+    from choreo_sgmd import export_for_inference
 
     with tempfile.TemporaryDirectory() as folder:
         if checkpoint is None:
             checkpoint = _train_tiny(Path(folder))
         out = Path(folder) / "seed.pt"
-        save_checkpoint(inference_state(load_checkpoint(checkpoint)), out)
+        export_for_inference(checkpoint, out)
         return out.read_bytes()
 
 
 def _train_tiny(folder: Path) -> Path:
     import torch
     from choreo.music import FEATURE_DIM
-    from choreo_sgmd.config import TrainConfig, model_config
-    from choreo_sgmd.data import WindowTensors
-    from choreo_sgmd.training import train
+    from choreo_sgmd import TrainConfig, WindowTensors, model_config, train
 
     t = torch.arange(150) / 30.0
     motion = torch.zeros(4, 150, 151)
@@ -170,8 +168,7 @@ def _train_tiny(folder: Path) -> Path:
 def repertoire_seed() -> bytes:
     """A two-clip ChoreoGraph repertoire written by Repertoire.save (smooth values: it compresses)."""
     from choreo.skeleton import SMPL24
-    from choreo_graph.config import CLIP_FRAMES
-    from choreo_graph.repertoire import Repertoire
+    from choreo_graph import CLIP_FRAMES, Repertoire
 
     n, frames = 2, CLIP_FRAMES
     rotations = np.zeros((n, frames, 24, 4), np.float32)
@@ -615,15 +612,16 @@ def read_m2d_config(path: Path) -> None:
 
 
 def read_sgmd_file(path: Path) -> None:
-    """`choreo generate --checkpoint`: the generator built from the file."""
-    from choreo_sgmd.generator import SGMDGenerator
+    """`choreo generate --checkpoint`: the generator built from the file (by the plugin's factory, as
+    `choreo.load_backend` builds it, but never from load_backend's cache: every input is a new file)."""
+    from choreo_sgmd import plugin
 
-    SGMDGenerator(path)
+    plugin.factory(path)
 
 
 def read_repertoire_file(path: Path) -> None:
     """`choreo graph --repertoire`: load, then what the graph reads of every clip."""
-    from choreo_graph.repertoire import Repertoire
+    from choreo_graph import Repertoire
 
     repertoire = Repertoire.load(path)
     repertoire.origins

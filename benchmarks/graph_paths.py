@@ -18,12 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
+from choreo import load_backend
 from choreo.constraints import Constraints
 from choreo.generator import GenerationRequest
 from choreo.metrics.pfc import physical_foot_contact
 from choreo.music import Music
-from choreo_graph import DEFAULT_CHECKPOINT
-from choreo_graph.generator import ChoreoGraphGenerator
 
 sys.path.insert(0, str(Path(__file__).parent))
 from common import EXAMPLE  # noqa: E402
@@ -74,7 +73,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--costs", type=float, nargs="+", default=[0.0, 4.0, 16.0, 64.0])
     args = parser.parse_args()
-    graph = ChoreoGraphGenerator.from_files(DEFAULT_CHECKPOINT)
+    graph = load_backend("graph")
     results = {}  # (path, cost) -> [(walk error, PFC, seconds)]
     chosen = songs(args.songs)
     for song in chosen:

@@ -68,25 +68,17 @@ def sgmd_dances(checkpoint: Path, scoring: ScoringSet, options: dict, with_style
 
 
 def graph_dances(train_clips, scoring: ScoringSet) -> list[Dance]:
-    from choreo_graph import DEFAULT_CHECKPOINT
-    from choreo_graph.evaluation import clips_repertoire
-    from choreo_graph.generator import ChoreoGraphGenerator
-    from choreo_graph.model import load_checkpoint
+    from choreo_graph import dataset_generator
 
-    model, _ = load_checkpoint(DEFAULT_CHECKPOINT)  # a repertoire cut from the train split, not the bundled one
-    generator = ChoreoGraphGenerator(model, clips_repertoire(model, train_clips, 60, "M2D train"))
+    generator = dataset_generator(train_clips, 60, "M2D train")  # a repertoire cut from the train split, not the bundled one
     return score_generator(generator, scoring, with_style=False)[1]
 
 
 def speed_and_memory(durations: list[float], folder: Path) -> list[tuple]:
     """(generator, song seconds, generation seconds, peak RSS MiB of the whole CLI run) per case."""
-    from choreo_graph.generator import ChoreoGraphGenerator
-    from choreo_sgmd.generator import SGMDGenerator
-    import choreo_graph
-    import choreo_sgmd
+    from choreo import load_backend
 
-    generators = {"sgmd": SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT),
-                  "graph": ChoreoGraphGenerator.from_files(choreo_graph.DEFAULT_CHECKPOINT)}
+    generators = {"sgmd": load_backend("sgmd"), "graph": load_backend("graph")}  # the bundled models
     rows = []
     for seconds in durations:
         song = write_song(folder, seconds)

@@ -102,17 +102,16 @@ def batch_against_sampling(folder: Path) -> None:
     """A folder of songs danced by one `choreo generate --out-dir` call, against the sum of the
     seconds SGMD spends sampling those songs' dances (measured in this process, model loaded
     once, each song analysed beforehand): what a batch pays beyond the sampling itself."""
+    from choreo import load_backend
     from choreo.generator import GenerationRequest
     from choreo.music import Music
-    import choreo_sgmd
-    from choreo_sgmd.generator import SGMDGenerator
 
     songs = folder / "batch"
     songs.mkdir()
     paths = [write_song(songs, 20.0 + i) for i in range(BATCH_SONGS)]  # 20-39 s, one file each
     (folder / "out").mkdir()
     wall, cpu = run_once(["generate", *paths, "--out-dir", folder / "out"])
-    generator, sampling = SGMDGenerator(choreo_sgmd.DEFAULT_CHECKPOINT), 0.0
+    generator, sampling = load_backend("sgmd"), 0.0  # the bundled model
     generator.generate(GenerationRequest(Music.from_file(paths[0]), seed=0))  # warm-up
     for path in paths:
         request = GenerationRequest(Music.from_file(path), seed=0)

@@ -17,9 +17,7 @@ import time
 import numpy as np
 import torch
 
-from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
-from choreo_sgmd.data import WindowTensors
-from choreo_sgmd.training import Trainer
+from choreo_sgmd import DiffusionConfig, Trainer, TrainConfig, WindowTensors, model_config
 
 
 

@@ -19,15 +19,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from choreo import load_backend
 from choreo.datasets import TRAIN, load_dataset
 from choreo.finishing.steps import steps
 from choreo.finishing.speed_limit import REAL_FLOOR_STEP, REAL_JOINT_SPEED, REFERENCE_FPS, speed_limit
 from choreo.generator import GenerationRequest
 from choreo.music import Music
-from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, build_repertoire_file
-from choreo_graph.repertoire import SpeedLimits
-from choreo_sgmd import DEFAULT_CHECKPOINT as SGMD_CHECKPOINT
-from choreo_sgmd.generator import SGMDGenerator
+from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, SpeedLimits, build_repertoire_file
 
 REPO = Path(__file__).resolve().parents[1]
 SONGS_PER_GENRE = 3  # enough material that a walk restricted to one genre need not replay itself
@@ -42,7 +40,7 @@ def main() -> None:
     parser.add_argument("--checkpoint", default=str(DEFAULT_CHECKPOINT))
     parser.add_argument("--footsteps", action="store_true", help="cut the clips from dances the step planner has finished")
     args = parser.parse_args()
-    sgmd = SGMDGenerator(SGMD_CHECKPOINT)
+    sgmd = load_backend("sgmd")  # the bundled SGMD checkpoint
     clips = sorted((c for c in load_dataset(args.data) if c.split == TRAIN and c.audio_path), key=lambda c: c.name)
     dances = []
     for genre in sorted({c.genre for c in clips}):

@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from choreo import load_backend
 from choreo.datasets import TEST, TRAIN, load_dataset
 from choreo.metrics.protocol import scoring_windows
 from choreo.motion import motion_to_vector, vector_to_motion
 from choreo.motion.vector import CONTACT_SLICE, ROOT_SLICE, ROTATION_SLICE
-from choreo_sgmd.evaluation import genre_styles
-from choreo_sgmd.generator import SGMDGenerator
+from choreo_sgmd import genre_styles
 
 REPO = Path(__file__).resolve().parents[1]
 ANKLES, PELVIS = [7, 8], 0
@@ -65,7 +65,7 @@ def main() -> None:
           + "".join(f" {name} (variance) |" for name in part_names))
     print("| --- | ---: | ---: | ---: | ---: |" + " ---: |" * len(part_names))
     for checkpoint in args.checkpoints:
-        generator = SGMDGenerator(checkpoint)
+        generator = load_backend("sgmd", checkpoint)
         stride = generator.model_config.frame_stride  # a 15 fps model sees every other frame
         x0 = generator.normalizer.normalize(torch.from_numpy(vectors[:, ::stride]).float())
         styles, keep_style = genre_styles(generator, [w.genre for w in windows])

@@ -18,16 +18,13 @@ from pathlib import Path
 
 import numpy as np
 
+from choreo import load_backend
 from choreo.datasets import TEST, TRAIN, load_dataset, select_split
+from choreo.generator import Generator
 from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row, windows_as_dances
 from choreo.metrics.stepping import root_speeds_by_genre
-from choreo_graph import DEFAULT_CHECKPOINT
-from choreo_graph.config import GraphConfig
-from choreo_graph.evaluation import clips_repertoire
-from choreo_graph.generator import ChoreoGraphGenerator
-from choreo_graph.graph import music_windows, replayed_nodes, select_candidates
-from choreo_graph.model import load_checkpoint
-from choreo_graph.repertoire import Repertoire
+from choreo_graph import (DEFAULT_CHECKPOINT, GraphConfig, dataset_generator, music_windows, replayed_nodes,
+                          select_candidates)
 
 REPO = Path(__file__).resolve().parents[1]
 VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dynamic": False},
@@ -35,8 +32,9 @@ VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dyna
             "smooth-4": {"warp_smoothing": 4.0}}
 
 
-def selector_genre_precision(model, repertoire: Repertoire, windows, mels, ks=(1, 64)) -> str:
+def selector_genre_precision(generator: Generator, windows, mels, ks=(1, 64)) -> str:
     """How often the style-based selector's picks for a window's first 4 s share the clip's genre."""
+    model, repertoire = generator.model, generator.repertoire
     chance = np.mean([np.mean(repertoire.genres == w.genre) for w in windows])
     shares = {k: [] for k in ks}
     for w in windows:
@@ -48,7 +46,7 @@ def selector_genre_precision(model, repertoire: Repertoire, windows, mels, ks=(1
     return f"selector picks of the test clip's genre: {found} (clips drawn at random: {100 * chance:.1f} %)"
 
 
-def whole_song_replays(generator: ChoreoGraphGenerator, mels: dict[str, np.ndarray], top_k: int) -> str:
+def whole_song_replays(generator: Generator, mels: dict[str, np.ndarray], top_k: int) -> str:
     """Seconds of whole test songs that replay source frames danced in the 30 s before."""
     found = []
     for label, cost in (("repeat cost", GraphConfig.repeat_cost), ("no repeat cost", 0.0)):
@@ -81,24 +79,23 @@ def main() -> None:
 
     clips = load_dataset(args.data)
     train = select_split(clips, TRAIN)
-    model, _ = load_checkpoint(args.checkpoint)
-    started = time.perf_counter()
+    started = time.perf_counter()  # the repertoire's time (it now includes loading the models: a fraction of a second)
     if args.repertoire:
-        repertoire = Repertoire.load(args.repertoire)
+        generator = load_backend("graph", args.checkpoint, repertoire=args.repertoire)
     else:
-        repertoire = clips_repertoire(model, train, round(args.stride * 30), "M2D train")
+        generator = dataset_generator(train, round(args.stride * 30), "M2D train", args.checkpoint)
+    repertoire = generator.repertoire
     print(f"repertoire: {len(repertoire)} clips of 8 s ({repertoire.source}, {time.perf_counter() - started:.1f} s)",
           flush=True)
-    if args.save_repertoire:
+    if args.save_repertoire:  # scored as read back from the file (its rotations are stored as float16)
         repertoire.save(args.save_repertoire)
-        repertoire = Repertoire.load(args.save_repertoire)
-    generator = ChoreoGraphGenerator(model, repertoire)
+        generator = load_backend("graph", args.checkpoint, repertoire=args.save_repertoire)
 
     scoring = ScoringSet.from_clips(clips)
     mels = scoring.log_mels()
     genres = [w.genre for w in scoring.windows]
     real = [d.positions for d in windows_as_dances(select_split(clips, TEST))]
-    print(selector_genre_precision(model, repertoire, scoring.windows, mels), flush=True)
+    print(selector_genre_precision(generator, scoring.windows, mels), flush=True)
     if args.whole_songs:
         print(whole_song_replays(generator, mels, args.top_k[0]), flush=True)
     print(TABLE_HEADER.format(label="ChoreoGraph variant"), flush=True)

@@ -10,8 +10,28 @@ from __future__ import annotations
 from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
+from choreo.generator.registry import lazy_exports
 
-from .config import GraphConfig, TrainOptions
+from .config import CLIP_FRAMES, GraphConfig, TrainOptions
+
+__all__ = [
+    "DEFAULT_CHECKPOINT", "DEFAULT_REPERTOIRE", "plugin", "build_generator", "train_from_dataset",
+    "build_repertoire_file", "GraphConfig", "TrainOptions",
+    # below: what scripts and benchmarks reach past `choreo.load_backend("graph")` for (issue 39)
+    "CLIP_FRAMES", "dataset_generator", "Repertoire", "SpeedLimits", "music_windows", "select_candidates",
+    "replayed_nodes",
+]
+# GraphConfig: the generator's options (top_k, dynamic, retempo, repeat_cost...); CLIP_FRAMES: frames in one
+# repertoire clip (8 s at 30 fps).
+
+# Loaded on first use (PEP 562), so `import choreo_graph` (every CLI start finds the plugin) stays torch-free.
+_LAZY = {
+    "Repertoire": ".repertoire",  # a repertoire file's clips (Repertoire.load, .save)
+    "SpeedLimits": ".repertoire",  # the clips `build_repertoire_file` leaves out (its ``limits``)
+    "music_windows": ".graph",  # the models' reading of a log-mel, one 4 s window per second (the selector's input)
+    "select_candidates": ".graph",  # the K repertoire clips the style selector picks for those windows
+    "replayed_nodes": ".graph",  # how many seconds of a walk replay source frames danced shortly before
+}
 
 WEIGHTS = Path(__file__).parent / "weights"
 DEFAULT_CHECKPOINT = WEIGHTS / "graph-m2d.pt"
@@ -73,6 +93,21 @@ def build_generator(checkpoint: str | Path, repertoire: str | Path | None = None
     from .generator import ChoreoGraphGenerator
 
     return ChoreoGraphGenerator.from_files(checkpoint, repertoire, GraphConfig(**graph_options))
+
+
+def dataset_generator(clips, stride: int, source: str, checkpoint: str | Path | None = None):
+    """The generator dancing from a repertoire cut from dataset ``clips`` (every 8 s clip, ``stride``
+    frames apart, described by the bundled or given models) instead of a repertoire file: how
+    scripts/evaluate_graph.py and benchmarks/report.py score it on M2D's test windows."""
+    from .evaluation import clips_repertoire
+    from .generator import ChoreoGraphGenerator
+    from .model import load_checkpoint
+
+    model, _ = load_checkpoint(checkpoint or DEFAULT_CHECKPOINT)
+    return ChoreoGraphGenerator(model, clips_repertoire(model, clips, stride, source))
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
 _READY = DEFAULT_CHECKPOINT.is_file() and DEFAULT_REPERTOIRE.is_file()

@@ -9,8 +9,32 @@ from __future__ import annotations
 from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
+from choreo.generator.registry import lazy_exports
 
 from .options import SamplingOptions, TrainOptions
+
+__all__ = [
+    "DEFAULT_CHECKPOINT", "plugin", "build_generator", "train_from_dataset", "SamplingOptions", "TrainOptions",
+    # below: what scripts and benchmarks reach past `choreo.load_backend("sgmd")` for (issue 39)
+    "train", "Trainer", "TrainConfig", "DiffusionConfig", "model_config", "WindowTensors", "windows_to_tensors",
+    "export_for_inference", "genre_styles",
+]
+
+# Loaded on first use (PEP 562), so `import choreo_sgmd` (every CLI start finds the plugin) stays torch-free.
+_LAZY = {
+    "train": ".training",  # train on prepared WindowTensors (benchmarks/fuzz_inputs.py: a tiny checkpoint in seconds)
+    "Trainer": ".training",  # one optimiser step at a time (benchmarks/train_step.py: seconds per training step)
+    "TrainConfig": ".config",  # what `train` and `Trainer` take: the training run's settings
+    "DiffusionConfig": ".config",  # ... the noise schedule and loss
+    "model_config": ".config",  # ... a network preset by name ("cpu", "small", "tiny")
+    "WindowTensors": ".data",  # ... the training windows as tensors
+    "windows_to_tensors": ".data",  # dataset clips cut into WindowTensors (as `train_from_dataset` does)
+    "export_for_inference": ".checkpoint",  # a training checkpoint's EMA-only inference copy (what weights/ holds)
+    "genre_styles": ".evaluation",  # style vectors for per-window genres (scripts that probe the network directly)
+}
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
 def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: TrainOptions = TrainOptions(),

@@ -8,8 +8,7 @@ import torch
 from choreo.datasets import TEST, TRAIN, load_dataset
 from choreo.metrics.protocol import score, scoring_windows, table_row, windows_as_dances, window_dance
 from choreo.motion.vector import CONTACT_SLICE, ROOT_SLICE, ROTATION_SLICE
-import choreo_sgmd.sampling as sampling
-from choreo_sgmd.guidance import GuidedDenoiser
+import choreo_sgmd.sampling as sampling  # the sampler's guidance class is replaced for the experiment: no public route
 from choreo import load_backend
 from choreo.metrics.protocol import generate_window_motions
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "m2d"
 CHECKPOINT = Path(__file__).resolve().parents[2] / "generators" / "choreo_sgmd" / "weights" / "sgmd-cpu-m2d.pt"
 torch.set_num_threads(1)
+GuidedDenoiser = sampling.GuidedDenoiser  # the shipped class, kept before the loop below replaces it
 KEEP = {"root": [ROOT_SLICE], "root+contacts": [ROOT_SLICE, CONTACT_SLICE], "rotations": [ROTATION_SLICE]}
 
 def channel_guided(unguided):

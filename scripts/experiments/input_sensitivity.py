@@ -14,7 +14,7 @@ import argparse
 
 import torch
 
-from choreo_sgmd.generator import SGMDGenerator
+from choreo import load_backend
 
 
 def main() -> None:
@@ -24,7 +24,7 @@ def main() -> None:
     print("| checkpoint | t | prediction std | change: x_t + 0.1 noise | change: another x_t |")
     print("| --- | ---: | ---: | ---: | ---: |")
     for checkpoint in args.checkpoints:
-        generator = SGMDGenerator(checkpoint)
+        generator = load_backend("sgmd", checkpoint)
         model, config = generator.model.eval(), generator.model_config
         draws = torch.Generator().manual_seed(0)
         batch, frames = 4, config.window_frames

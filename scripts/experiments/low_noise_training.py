@@ -22,9 +22,7 @@ import torch.nn as nn
 
 from choreo.datasets import TRAIN, WindowConfig, load_dataset
 from choreo.motion.vector import ROTATION_SLICE
-from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
-from choreo_sgmd.data import windows_to_tensors
-from choreo_sgmd.training import Trainer
+from choreo_sgmd import DiffusionConfig, Trainer, TrainConfig, model_config, windows_to_tensors
 
 
 def main() -> None:
