@@ -10,7 +10,8 @@ the re-timing is a monotone warp of the dance's own frames:
    moves further than ``max_shift_seconds``, and between consecutive pairs the dance plays at a
    speed within [min_speed, max_speed] of the original, with a cost on straying from 1 and a
    bonus when consecutive pairs are one or two music beats apart (so the motion beats recur at
-   the song's pulse, not merely somewhere on its grid: measured, docs/results.md);
+   the song's pulse, not merely somewhere on its grid: measured, docs/history/results-2026-12-01-to-2026-12-04.md,
+   "Finishing passes: speed limit, beat lock and foot lock");
 2. the warp runs through the pairs with a constant playback speed for ``hold_frames`` either
    side of each locked beat, and changes speed only between beats, along raised-cosine ramps.
    Why hold: a motion beat is a minimum of the smoothed joint speed, and a playback speed that
