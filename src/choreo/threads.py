@@ -45,11 +45,16 @@ def cgroup_cpu_quota() -> float | None:
 
 
 def busy_elsewhere() -> int:
-    """Tasks of other processes running or waiting for a CPU now (median of a few quick reads)."""
+    """Tasks of other processes running or waiting for a CPU now (median of a few quick reads).
+
+    Between reads this process spins rather than sleeps: jobs started together reach this point
+    together, and a job asleep here looks idle to the others, so each would take every CPU."""
     counts = []
     for i in range(SAMPLES):
         if i:
-            time.sleep(SAMPLE_INTERVAL)
+            deadline = time.perf_counter() + SAMPLE_INTERVAL
+            while time.perf_counter() < deadline:
+                pass
         try:
             running = int(LOADAVG.read_text().split()[3].split("/")[0])
         except (OSError, ValueError, IndexError):
