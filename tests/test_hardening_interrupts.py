@@ -32,8 +32,11 @@ def dance(frames: int) -> Motion:
 
 
 def start(args, cwd: Path, env=None) -> subprocess.Popen:
+    """choreo in a child whose Ctrl-C is live: pytest itself may run with SIGINT ignored (started in
+    the background by a script, as `nohup ... &` does), and choreo rightly leaves it ignored then."""
     return subprocess.Popen([sys.executable, "-m", "choreo", *map(str, args)], cwd=cwd, stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env={**os.environ, **(env or {})})
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env={**os.environ, **(env or {})},
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def wait_for(condition, what: str, timeout: float = 120.0):
