@@ -13,7 +13,9 @@ hears in their music (M2D states no tempo); the generators are scored the same w
 test songs, the music they were trained for. Also printed: how often that analysis hears the
 stated tempo of the outside songs (the generators dance to what it hears). ``--beats stated``
 dances the outside songs to their stated tempo as a user who knows it would (``--bpm``), and
-``--beats madmom`` to madmom's beats everywhere (``--beat-tracker madmom``).
+``--beats madmom`` to madmom's beats everywhere (``--beat-tracker madmom``); ``--finished`` scores
+the dances after every finishing pass (speed limit, beat lock, footsteps) instead of the beat
+lock alone.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from choreo.generator import GenerationRequest
-from choreo.finishing import beat_lock
+from choreo.finishing import beat_lock, finish
 from choreo.metrics import beat_align_score, beat_autocorrelation, motion_beats, salience_at, same_pulse
 from choreo.music import BeatSource, Music, audio_duration
 
@@ -53,6 +55,7 @@ def beat_profile(joint_positions: np.ndarray) -> np.ndarray:
 
 SGMD_CHECKPOINT: Path | None = None  # --sgmd-checkpoint: score another SGMD model than the bundled one
 SEED = 0  # --seed: another take of every dance (the lock shares move by several points from take to take)
+FINISHED = False  # --finished: every finishing pass as the CLI applies them (speed limit, beat lock, footsteps)
 BEATS = "choreo"  # --beats: whose beats the songs are danced to (choreo's tracker, the stated tempo, madmom's)
 
 
@@ -78,9 +81,9 @@ def generated(backends: dict, music: Music, where: str) -> dict[str, np.ndarray]
     for name, backend in backends.items():
         motion = backend.generate(GenerationRequest(music, seed=SEED))
         started = time.perf_counter()
-        locked = beat_lock(motion, music.beat_frames).motion
+        locked = finish(motion, music.beat_frames) if FINISHED else beat_lock(motion, music.beat_frames).motion
         LOCK_SECONDS.append((time.perf_counter() - started, motion.duration))
-        for label, dance in ((name, motion), (f"{name} + beat lock", locked)):
+        for label, dance in ((name, motion), (f"{name} + {'finishing' if FINISHED else 'beat lock'}", locked)):
             positions = dance.joint_positions()
             profiles[label] = beat_profile(positions)
             BEAT_ALIGN.setdefault(f"{label} ({where})", []).append(beat_align_score(music.beat_frames, motion_beats(positions)))
@@ -151,7 +154,7 @@ def markdown(outside: list[Danced], m2d: list[Danced]) -> list[str]:
               *(f"| {name} | {np.mean(values):.3f} |" for name, values in BEAT_ALIGN.items())]
     if LOCK_SECONDS:
         spent, danced_seconds = np.sum(LOCK_SECONDS, axis=0)
-        lines += ["", f"The beat lock took {spent:.1f} s for {danced_seconds / 60:.1f} min of dance "
+        lines += ["", f"The {'finishing passes' if FINISHED else 'beat lock'} took {spent:.1f} s for {danced_seconds / 60:.1f} min of dance "
                       f"({60 * spent / danced_seconds:.2f} s per minute)."]
     lines += ["", f"choreo's music analysis hears the stated tempo (or half or double it, within 4 %) in "
               f"{100 * heard:.0f} % of the outside songs."]
@@ -166,9 +169,11 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="the generators' seed (another take of every dance)")
     parser.add_argument("--beats", choices=["choreo", "stated", "madmom"], default="choreo",
                         help="dance to choreo's tracked beats, the outside songs' stated tempo (--bpm), or madmom's beats")
+    parser.add_argument("--finished", action="store_true",
+                        help="score the dances as the CLI writes them (speed limit, beat lock, footsteps), not the beat lock alone")
     args = parser.parse_args()
-    global SGMD_CHECKPOINT, SEED, BEATS
-    SGMD_CHECKPOINT, SEED, BEATS = args.sgmd_checkpoint, args.seed, args.beats
+    global SGMD_CHECKPOINT, SEED, BEATS, FINISHED
+    SGMD_CHECKPOINT, SEED, BEATS, FINISHED = args.sgmd_checkpoint, args.seed, args.beats, args.finished
     started = time.perf_counter()
     outside = dance_outside_songs(args.seconds)
     if not outside:
