@@ -139,7 +139,7 @@ def test_joint_positions_are_computed_a_chunk_at_a_time(monkeypatch):
 
 
 def test_frame_vectors_are_decoded_a_chunk_at_a_time(monkeypatch):
-    import choreo.motion.vector as vector_module
+    import choreo.motion.motion as motion_module  # where the chunk size lives (choreo.motion.motion.frame_chunks)
     from choreo.skeleton import rotations
 
     vectors = motion_to_vector(random_motion(10)).astype(np.float64)
@@ -150,7 +150,7 @@ def test_frame_vectors_are_decoded_a_chunk_at_a_time(monkeypatch):
         calls.append(np.shape(rot6d))
         return original(rot6d)
 
-    monkeypatch.setattr(vector_module, "FRAME_CHUNK", 4)
+    monkeypatch.setattr(motion_module, "FRAME_CHUNK", 4)
     monkeypatch.setattr(rotations, "rot6d_to_matrix", recording)
     motion, _ = vector_to_motion(vectors)
     assert calls == [(4, 24, 6), (4, 24, 6), (2, 24, 6)]

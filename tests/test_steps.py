@@ -127,7 +127,7 @@ def test_finish_runs_the_planner_when_asked():
 
 
 def test_long_dances_are_turned_a_chunk_at_a_time_with_the_same_result(monkeypatch):
-    import choreo.finishing.steps as module
+    import choreo.motion.motion as module  # every chunked loop takes its size from choreo.motion.motion.frame_chunks
 
     motion = glider(seconds=2.0)
     whole = steps(motion)

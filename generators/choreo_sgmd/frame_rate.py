@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from choreo.motion.motion import FRAME_CHUNK
+from choreo.motion.motion import frame_chunks
 from choreo.music import BEAT_COLUMN, PEAK_COLUMN
 
 EVENT_COLUMNS = (PEAK_COLUMN, BEAT_COLUMN)  # one-hot columns of the 35-d features (the rhythm channels come after)
@@ -68,7 +68,6 @@ def frames_at_full_rate(vectors: np.ndarray, stride: int, num_frames: int) -> np
     upper = np.minimum(lower + 1, vectors.shape[-2] - 1)
     weight = (position - lower)[:, None].astype(vectors.dtype)
     out = np.empty((*vectors.shape[:-2], num_frames, vectors.shape[-1]), np.result_type(vectors.dtype, weight.dtype))
-    for first in range(0, num_frames, FRAME_CHUNK):  # a chunk at a time: an hour's temporaries would be large
-        chunk = slice(first, first + FRAME_CHUNK)
+    for chunk in frame_chunks(num_frames):
         out[..., chunk, :] = vectors[..., lower[chunk], :] * (1 - weight[chunk]) + vectors[..., upper[chunk], :] * weight[chunk]
     return out

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..motion import Motion
-from ..motion.motion import FRAME_CHUNK
+from ..motion.motion import frame_chunks
 
 REFERENCE_FPS = 30.0
 REAL_JOINT_SPEED = 10.39  # m/s: real M2D's fastest 0.1 % of frames (any joint) start here
@@ -50,12 +50,10 @@ def speed_limit(motion: Motion, fixed: np.ndarray | None = None, config: SpeedLi
         root[chosen[:, None], [0, 2]] = smoothed(root[:, [0, 2]], chosen)
     rotations = motion.rotations.copy()
     positions = np.empty((motion.num_frames, motion.num_joints, 3))
-    for first in range(0, motion.num_frames, FRAME_CHUNK):  # a chunk at a time: no second copy of a song's rotations
-        chunk = slice(first, first + FRAME_CHUNK)
+    for chunk in frame_chunks(motion.num_frames):  # no second copy of a song's rotations
         positions[chunk] = motion.replace(root_positions=root[chunk], rotations=motion.rotations[chunk]).joint_positions()
-    speed = np.concatenate([step_lengths(positions[first: first + FRAME_CHUNK + 1]).max(-1)  # a chunk at a time
-                            for first in range(0, motion.num_frames - 1, FRAME_CHUNK)]) * motion.fps
-    # (T-1,), kept up to date where frames move
+    speed = np.concatenate([step_lengths(positions[steps.start: steps.stop + 1]).max(-1)
+                            for steps in frame_chunks(motion.num_frames - 1)]) * motion.fps  # (T-1,), kept up to date where frames move
     for _ in range(config.max_passes):
         chosen = frames_around(speed > config.joint_speed, movable, config.reach)
         if not len(chosen):

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..motion import Motion
-from ..motion.motion import FRAME_CHUNK
+from ..motion.motion import frame_chunks
 from ..skeleton import SMPL24
 from ..skeleton import rotations as rot
 from ..skeleton.kinematics import global_rotations
@@ -128,8 +128,7 @@ def steps(motion: Motion, fixed: np.ndarray | None = None, config: StepConfig = 
     weight = config.strength * fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
     targets = wanted + (plan_steps(wanted, motion.fps, config) - wanted) * weight
     rotations = motion.rotations.copy()
-    for first in range(0, motion.num_frames, FRAME_CHUNK):  # a song's rotation matrices at once would be large
-        chunk = slice(first, first + FRAME_CHUNK)
+    for chunk in frame_chunks(motion.num_frames):  # a song's rotation matrices at once would be large
         rotations[chunk] = legs_reaching(motion.rotations[chunk], positions[chunk], targets[chunk],
                                          motion.skeleton.parents)
     rotations[fixed] = motion.rotations[fixed]  # exactly as given, not merely within rounding

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import MotionFormatError
 from ..motion import Motion, source_name
-from ..motion.motion import FRAME_CHUNK
+from ..motion.motion import frame_chunks
 from ..skeleton import (SMPL24, Skeleton, elementary_rotation, euler_to_matrix, matrix_to_euler,
                         matrix_to_quaternion)
 
@@ -372,9 +372,8 @@ def _local_quaternions(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
     gigabytes, the quaternions a few hundred megabytes."""
     frames = len(data.values)
     quaternions, root = np.empty((frames, len(data.joints), 4)), np.empty((frames, 3))
-    for start in range(0, frames, FRAME_CHUNK):
-        block = slice(start, start + FRAME_CHUNK)
-        rotmats, root[block] = _local_rotations(BvhData(data.joints, data.frame_time, data.values[block]), start == 0)
+    for block in frame_chunks(frames):
+        rotmats, root[block] = _local_rotations(BvhData(data.joints, data.frame_time, data.values[block]), block.start == 0)
         quaternions[block] = matrix_to_quaternion(rotmats)
     return quaternions, root
 

@@ -6,15 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from .motion import frame_chunks
+
 SPEED_SMOOTHING_SIGMA = 5.0  # frames, as in the reference code
 
 
 def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
     """(T-1,) mean over joints of |p[t+1] - p[t]| (metres per frame)."""
-    from .motion import FRAME_CHUNK
-
-    return np.concatenate([np.linalg.norm(np.diff(joint_positions[first: first + FRAME_CHUNK + 1], axis=0), axis=-1).mean(axis=-1)
-                           for first in range(0, max(len(joint_positions) - 1, 1), FRAME_CHUNK)])  # a chunk at a time
+    return np.concatenate([np.linalg.norm(np.diff(joint_positions[steps.start: steps.stop + 1], axis=0), axis=-1).mean(axis=-1)
+                           for steps in frame_chunks(max(len(joint_positions) - 1, 1))])
 
 
 def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:

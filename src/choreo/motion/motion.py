@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, replace
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 
@@ -21,6 +21,12 @@ MIN_FPS, MAX_FPS = 1.0, 1000.0  # outside these, a frame rate is a damaged file,
 MAX_COORDINATE = 1e5  # metres: 100 km from the origin is a damaged file, and formats lose precision beyond
 MAX_BONE = 1e3  # metres: a rest offset past this is a damaged file (and BVH's unit guess would overflow on it)
 FRAME_CHUNK = 4096  # frames converted at once where a whole song's intermediates would be large
+
+
+def frame_chunks(num_frames: int) -> Iterator[slice]:
+    """Slices of at most FRAME_CHUNK frames covering ``range(num_frames)``: an hour of dance
+    converted at once would hold gigabytes of intermediates."""
+    return (slice(first, first + FRAME_CHUNK) for first in range(0, num_frames, FRAME_CHUNK))
 
 
 def source_name(path: str | os.PathLike) -> str:
@@ -120,8 +126,8 @@ class Motion:
     def axis_angle(self) -> np.ndarray:
         """(T, J, 3) local rotations as rotation vectors (a chunk of frames at a time, as joint_positions)."""
         out = np.empty((self.num_frames, self.num_joints, 3))
-        for first in range(0, self.num_frames, FRAME_CHUNK):
-            out[first: first + FRAME_CHUNK] = rot.quaternion_to_axis_angle(self.rotations[first: first + FRAME_CHUNK])
+        for chunk in frame_chunks(self.num_frames):
+            out[chunk] = rot.quaternion_to_axis_angle(self.rotations[chunk])
         return out
 
     def joint_positions(self, dtype=np.float64) -> np.ndarray:
@@ -129,8 +135,7 @@ class Motion:
         (an hour of dance would otherwise hold gigabytes of rotation matrices at once); ``dtype``
         float32 rounds each chunk as it is done (as ``.astype(np.float32)`` would, without a float64 copy)."""
         out = np.empty((self.num_frames, self.num_joints, 3), dtype)
-        for first in range(0, self.num_frames, FRAME_CHUNK):
-            chunk = slice(first, first + FRAME_CHUNK)
+        for chunk in frame_chunks(self.num_frames):
             out[chunk] = forward_kinematics(rot.quaternion_to_matrix(self.rotations[chunk]), self.root_positions[chunk],
                                             self.skeleton.offsets, self.skeleton.parents)
         return out
@@ -198,8 +203,7 @@ class Motion:
         weight = source_time - lower
         root = (1 - weight)[:, None] * self.root_positions[lower] + weight[:, None] * self.root_positions[upper]
         rotations = np.empty((len(source_time), self.num_joints, 4))
-        for first in range(0, len(source_time), FRAME_CHUNK):  # a song's slerp temporaries at once would be large
-            chunk = slice(first, first + FRAME_CHUNK)
+        for chunk in frame_chunks(len(source_time)):  # a song's slerp temporaries at once would be large
             rotations[chunk] = rot.quaternion_slerp(
                 self.rotations[lower[chunk]], self.rotations[upper[chunk]],
                 np.broadcast_to(weight[chunk, None], (len(weight[chunk]), self.num_joints)).copy(),
@@ -221,10 +225,9 @@ def positions_at(joint_positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
     interpolated: cheap where speeds, not rotations, are what is read."""
     frames = np.clip(np.asarray(frames, dtype=np.float64), 0, len(joint_positions) - 1)
     out = np.empty((len(frames), *joint_positions.shape[1:]), np.result_type(joint_positions, np.float64))
-    for first in range(0, len(frames), FRAME_CHUNK):  # a chunk at a time: the temporaries of a song are large
-        chunk = frames[first: first + FRAME_CHUNK]
-        lower = np.floor(chunk).astype(int)
+    for chunk in frame_chunks(len(frames)):  # the temporaries of a song are large
+        lower = np.floor(frames[chunk]).astype(int)
         upper = np.minimum(lower + 1, len(joint_positions) - 1)
-        weight = (chunk - lower)[:, None, None]
-        out[first: first + FRAME_CHUNK] = (1 - weight) * joint_positions[lower] + weight * joint_positions[upper]
+        weight = (frames[chunk] - lower)[:, None, None]
+        out[chunk] = (1 - weight) * joint_positions[lower] + weight * joint_positions[upper]
     return out

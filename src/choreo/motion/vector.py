@@ -8,7 +8,7 @@ from ..errors import ParameterError
 from ..skeleton import SMPL24
 from ..skeleton import rotations as rot
 from .contacts import foot_contacts
-from .motion import DEFAULT_FPS, FRAME_CHUNK, Motion
+from .motion import DEFAULT_FPS, Motion, frame_chunks
 
 CONTACT_SLICE = slice(0, 4)
 ROOT_SLICE = slice(4, 7)
@@ -35,8 +35,7 @@ def vector_to_motion(vectors: np.ndarray, fps: float = DEFAULT_FPS, **kwargs) ->
     if vectors.ndim != 2 or vectors.shape[1] != FRAME_DIM:
         raise ParameterError(f"frame vectors must have shape (T, {FRAME_DIM}), got {vectors.shape}")
     quaternions = np.zeros((len(vectors), 24, 4))
-    for first in range(0, len(vectors), FRAME_CHUNK):  # chunks bound the matrices' memory on long songs
-        chunk = slice(first, first + FRAME_CHUNK)
+    for chunk in frame_chunks(len(vectors)):
         rot6d = np.asarray(vectors[chunk, ROTATION_SLICE], dtype=np.float64).reshape(-1, 24, 6)
         quaternions[chunk] = rot.matrix_to_quaternion(rot.rot6d_to_matrix(rot6d))
     root = np.array(vectors[:, ROOT_SLICE], dtype=np.float64)

@@ -55,11 +55,11 @@ def track_beats(samples: np.ndarray) -> np.ndarray:
     return np.asarray(madmom.features.beats.DBNBeatTrackingProcessor(fps=ACTIVATION_FPS)(activation), dtype=np.float64)
 
 
-def resampled(samples: np.ndarray, sr: int) -> np.ndarray:
-    """A mono signal at ``sr`` brought to madmom's 44.1 kHz."""
+def track_array(samples: np.ndarray, sr: int) -> np.ndarray:
+    """Beat times in seconds of a mono signal at ``sr``, brought to madmom's 44.1 kHz first."""
     import soxr
 
-    return soxr.resample(np.asarray(samples, np.float32), sr, SAMPLE_RATE).astype(np.float32)
+    return track_beats(soxr.resample(np.asarray(samples, np.float32), sr, SAMPLE_RATE).astype(np.float32))
 
 
 def track_file(path: str | os.PathLike, start: float | None = None, end: float | None = None) -> np.ndarray:

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from .audio import check_usable, iter_audio_blocks
+from . import madmom_tracker  # light: madmom itself loads only when asked for
 from .beat_source import BeatSource
 from .beats import BEAT_HOP, onset_envelopes
 from .mel import LogMelStream, fit_length, log_mel as log_mel_of
@@ -95,7 +96,7 @@ class Music:
         mel = LogMelStream() if log_mel else None
         if mel is not None:
             blocks = _also_into(blocks, mel)
-        heard = beats.excerpt(start or 0.0, end).heard(lambda: _madmom().track_file(path, start, end))
+        heard = beats.excerpt(start or 0.0, end).heard(lambda: madmom_tracker.track_file(path, start, end))
         features, tempo, beat_times = stream_features(blocks, str(path), progress=report, timbre=timbre, beats=heard)
         return cls(path=path, duration=_duration(features), fps=float(FPS), features=features, beat_times=beat_times,
                    tempo=tempo, start=start or 0.0,
@@ -117,7 +118,7 @@ class Music:
         num_frames = len(samples) // HOP_LENGTH
         per_frame = frame_features(samples, timbre=timbre)[:num_frames]
         envelopes = onset_envelopes(samples, SAMPLE_RATE)[:, : len(samples) // BEAT_HOP]
-        beats = beats.heard(lambda: _madmom().track_beats(_madmom().resampled(samples, SAMPLE_RATE)))
+        beats = beats.heard(lambda: madmom_tracker.track_array(samples, SAMPLE_RATE))
         features, tempo, beat_times = assemble_features(per_frame, FPS, envelopes, SAMPLE_RATE / BEAT_HOP, beats)
         return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
                    beat_times=beat_times, tempo=tempo,
@@ -130,12 +131,6 @@ def _also_into(blocks: Iterable[np.ndarray], sink) -> Iterator[np.ndarray]:
     for block in blocks:
         sink.push(block)
         yield block
-
-
-def _madmom():
-    from . import madmom_tracker
-
-    return madmom_tracker
 
 
 def _duration(features: np.ndarray) -> float:
