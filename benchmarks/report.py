@@ -57,7 +57,7 @@ def retrieval_dances(train_windows, test_windows) -> list[Dance]:
 SGMD_GUIDANCE_ROWS = {  # label: sampling options (the rest: the defaults)
     "SGMD bundled, no guidance": {"guidance": 1.0, "style_guidance": 1.0},
     "SGMD bundled, guidance 2 on the music only (the default until 2026-12-04)": {"guidance": 2.0, "style_guidance": 1.0},
-    "SGMD bundled, default (guidance 2 on the music, t/T <= 0.6, and 2 on the style)": {},
+    "SGMD bundled, default (guidance 2.5 on the music, t/T <= 0.6, and 2 on the style)": {},
 }
 
 

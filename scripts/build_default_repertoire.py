@@ -29,7 +29,7 @@ from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE, SpeedLimits, bu
 
 REPO = Path(__file__).resolve().parents[1]
 SONGS_PER_GENRE = 3  # enough material that a walk restricted to one genre need not replay itself
-SAMPLING = {"style_guidance": 1.0}  # the sampler the shipped file was built with (before style guidance became default)
+SAMPLING = {"guidance": 2.0, "style_guidance": 1.0}  # the sampler the shipped file was built with (the default until 2026-12-04)
 LIMITS = SpeedLimits(joint=REAL_JOINT_SPEED, root=REAL_FLOOR_STEP * REFERENCE_FPS)  # m/s: real dancers' fastest 0.1 %
 
 

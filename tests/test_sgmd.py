@@ -204,16 +204,20 @@ def test_default_guidance_guides_the_style_and_the_music_on_the_low_noise_steps_
     model = Denoiser(TINY).eval()
     x, _, music, style = inputs(batch=2)
     options, schedule = SamplingOptions().resolved(constrained=False), NoiseSchedule()
-    assert (options.guidance, options.style_guidance, options.guidance_interval) == (2.0, 2.0, None)
-    assert SamplingOptions().resolved(constrained=True).style_guidance == 1.0  # edits keep to the given frames
-    assert SamplingOptions(style_guidance=3.0).resolved(constrained=True).style_guidance == 3.0
+    assert (options.guidance, options.style_guidance, options.guidance_interval) == (2.5, 2.0, None)
+    edit = SamplingOptions().resolved(constrained=True)
+    assert (edit.guidance, edit.style_guidance) == (2.0, 1.0)  # edits keep to the given frames
+    asked = SamplingOptions(guidance=1.5, style_guidance=3.0).resolved(constrained=True)
+    assert (asked.guidance, asked.style_guidance) == (1.5, 3.0)  # what the user asks for stays
+    with pytest.raises(ValueError, match="resolve"):
+        guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool), SamplingOptions(), schedule)
     styled = guided_denoiser(model, music, style, torch.tensor([True, False]), options, schedule)
     assert styled.interval == (0, 599) and styled.style_interval == (0, 999)
     assert [styled.evaluations_at(t) for t in (599, 600)] == [3, 2]  # 10 DDIM steps: 6 x 3 + 4 x 2 = 26
     unstyled = guided_denoiser(model, music, style, torch.zeros(2, dtype=torch.bool), options, schedule)
     assert unstyled.interval == (0, 999) and [unstyled.evaluations_at(t) for t in (599, 600)] == [2, 2]
     plain = guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool),
-                            SamplingOptions(style_guidance=1.0), schedule)
+                            SamplingOptions(style_guidance=1.0).resolved(constrained=False), schedule)
     assert plain.interval == (0, 999) and plain.evaluations_at(600) == 2
     given = SamplingOptions(guidance_interval=(0.2, 1.0)).resolved(constrained=False)
     assert guided_denoiser(model, music, style, torch.ones(2, dtype=torch.bool), given, schedule).interval == (200, 999)
@@ -427,7 +431,7 @@ def test_generate_writes_several_formats_deterministically(tiny_checkpoint, tmp_
     args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3", "--seed", "5"]
     code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "a.bvh", "-o", tmp_path / "a.npz")
     assert code == 0, err
-    assert "wrote" in err and "waltz" in err and "3 steps, guidance 2, style guidance 2," in err
+    assert "wrote" in err and "waltz" in err and "3 steps, guidance 2.5, style guidance 2," in err
     bvh, npz = read_motion(tmp_path / "a.bvh"), read_motion(tmp_path / "a.npz")
     assert npz.metadata["style_guidance"] == 2.0
     assert bvh.num_frames == npz.num_frames == Music.from_file(EXAMPLE_SONG).num_frames
@@ -445,7 +449,7 @@ def test_style_guidance_flag_changes_the_dance_and_its_summary(tiny_checkpoint, 
     args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3"]
     code, _, err = run_cli(capsys, "generate", *args, "--style-guidance", "1", "-o", tmp_path / "plain.npz")
     assert code == 0, err
-    assert "guidance 2, seed 0" in err and "style guidance" not in err
+    assert "guidance 2.5, seed 0" in err and "style guidance" not in err
     code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "guided.npz")
     assert code == 0, err
     plain, guided = read_motion(tmp_path / "plain.npz"), read_motion(tmp_path / "guided.npz")

@@ -7,7 +7,7 @@ import torch
 from conftest import synthetic_windows
 
 from choreo.motion import Motion, motion_to_vector
-from choreo.motion.vector import CONTACT_SLICE, ROTATION_SLICE
+from choreo.motion.vector import CONTACT_SLICE, ROOT_SLICE, ROTATION_SLICE
 from choreo.skeleton import LOWER_BODY_JOINTS
 from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
 from choreo_sgmd.losses import diffusion_losses, leg_channels
@@ -45,6 +45,21 @@ def test_stepping_term_compares_the_feet_speeds_in_metres_per_second():
     terms = diffusion_losses(predicted, target, normalizer)
     without = DiffusionConfig()
     assert float(terms.total(config) - terms.total(without)) == pytest.approx(2.0 * float(terms.stepping), rel=1e-5)
+
+
+def test_root_speed_term_compares_pace_whatever_the_direction():
+    predicted, target, normalizer = skating_and_standing()  # the prediction glides 1 m/s, the target stands
+    assert float(diffusion_losses(predicted, target, normalizer).root_speed) == pytest.approx(1.0, rel=1e-3)
+    backwards_motion = normalizer.denormalize(predicted)
+    backwards_motion[..., ROOT_SLICE.start] *= -1  # the root's x: the same glide the other way
+    backwards = normalizer.normalize(backwards_motion)
+    assert float(diffusion_losses(backwards, predicted, normalizer).root_speed) == pytest.approx(0.0, abs=1e-6)
+    assert float(diffusion_losses(backwards, predicted, normalizer).joints) > 0  # which the other terms do see
+    terms = diffusion_losses(predicted, target, normalizer)
+    added = terms.total(DiffusionConfig(root_speed_weight=3.0)) - terms.total(DiffusionConfig())
+    assert float(added) == pytest.approx(3.0 * float(terms.root_speed), rel=1e-5)
+    with pytest.raises(ValueError, match="root_speed_weight"):
+        DiffusionConfig(root_speed_weight=-1.0)
 
 
 def test_leg_weight_scales_only_the_legs_rotation_channels():

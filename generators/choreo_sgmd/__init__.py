@@ -11,10 +11,11 @@ from pathlib import Path
 from choreo.generator import GeneratorPlugin
 from choreo.generator.registry import lazy_exports
 
-from .options import SamplingOptions, TrainOptions
+from .options import FREE_MUSIC_GUIDANCE, SamplingOptions, TrainOptions
 
 __all__ = [
     "DEFAULT_CHECKPOINT", "plugin", "build_generator", "train_from_dataset", "SamplingOptions", "TrainOptions",
+    "FREE_MUSIC_GUIDANCE",
     # below: what scripts and benchmarks reach past `choreo.load_backend("sgmd")` for (issue 39)
     "train", "Trainer", "TrainConfig", "DiffusionConfig", "model_config", "WindowTensors", "windows_to_tensors",
     "export_for_inference", "genre_styles",
@@ -63,7 +64,8 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
                                          "snr_gamma": options.snr_gamma, "sigma_data": options.sigma_data,
                                          "reconstruction_weight": options.reconstruction_weight,
                                          "foot_weight": options.foot_weight, "contact_source": options.contact_source,
-                                         "stepping_weight": options.stepping_weight, "leg_weight": options.leg_weight}))
+                                         "stepping_weight": options.stepping_weight, "leg_weight": options.leg_weight,
+                                         "root_speed_weight": options.root_speed_weight}))
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]

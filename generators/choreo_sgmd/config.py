@@ -68,12 +68,13 @@ class DiffusionConfig:
     contact_source: str = "predicted"  # contacts that pin the feet: the model's own (EDGE) or the data's ("target")
     stepping_weight: float = 0.0  # the feet's world speeds against the data's, in (m/s)^2 (docs/sgmd.md, "Feet")
     leg_weight: float = 1.0  # the legs' rotation channels' weight inside the reconstruction term
+    root_speed_weight: float = 0.0  # the root's horizontal speed against the data's, in (m/s)^2, whatever the direction
 
     def __post_init__(self):
         if self.contact_source not in CONTACT_SOURCES:
             raise ValueError(f"contact_source must be one of {CONTACT_SOURCES}, got {self.contact_source!r}")
-        if self.stepping_weight < 0 or self.foot_weight < 0 or self.leg_weight <= 0:
-            raise ValueError("foot_weight and stepping_weight must be >= 0, leg_weight > 0")
+        if self.stepping_weight < 0 or self.foot_weight < 0 or self.root_speed_weight < 0 or self.leg_weight <= 0:
+            raise ValueError("foot_weight, stepping_weight and root_speed_weight must be >= 0, leg_weight > 0")
         if not 0 < self.sigma_data <= 10:
             raise ValueError(f"sigma_data must be in (0, 10], got {self.sigma_data}")
         if self.snr_gamma < 0:

@@ -30,11 +30,14 @@ class LossTerms:
     joints: torch.Tensor
     foot: torch.Tensor
     stepping: torch.Tensor  # the feet's world speeds against the data's, in (m/s)^2
+    root_speed: torch.Tensor  # the root's horizontal speed against the data's, in (m/s)^2
 
     def total(self, config: DiffusionConfig) -> torch.Tensor:
         total = (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
                  + config.joint_weight * self.joints + config.foot_weight * self.foot)
-        return total + config.stepping_weight * self.stepping if config.stepping_weight else total
+        if config.stepping_weight:
+            total = total + config.stepping_weight * self.stepping
+        return total + config.root_speed_weight * self.root_speed if config.root_speed_weight else total
 
 
 def joint_positions(vectors: torch.Tensor) -> torch.Tensor:
@@ -75,8 +78,20 @@ def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: 
     in_contact = (contacts[:, :-1, CONTACT_SLICE] > CONTACT_THRESHOLD).to(predicted.dtype)
     foot = _per_window(feet_velocity.pow(2).sum(-1) * in_contact)  # no gradient through the contact mask
     stepping = _per_window((feet_velocity - foot_velocity(target_joints)).mul(FPS).pow(2).sum(-1))
+    root_speed = _per_window((horizontal_root_speed(predicted_motion) - horizontal_root_speed(target_motion)).pow(2))
     weigh = (lambda term: term.mean()) if weights is None else (lambda term: (term * weights).mean())  # noqa: E731
-    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping))
+    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping), weigh(root_speed))
+
+
+def horizontal_root_speed(vectors: torch.Tensor) -> torch.Tensor:
+    """(B, T, 151) de-normalised frame vectors -> (B, T - 1) the root's horizontal speed in m/s.
+
+    A speed, not a velocity: where the data may travel any way, the mean velocity a squared error
+    pulls towards is near standing still (what the stepping term did to the whole dancer,
+    docs/sgmd.md), while the mean speed is the data's pace."""
+    root = vectors[..., ROOT_SLICE]
+    step = (root[:, 1:] - root[:, :-1])[..., [0, 2]] * FPS
+    return torch.sqrt(step.pow(2).sum(-1) + 1e-8)
 
 
 def foot_velocity(joints: torch.Tensor) -> torch.Tensor:

@@ -218,9 +218,9 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
 
 def guided_denoiser(model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor,
                     options: SamplingOptions, schedule: NoiseSchedule) -> GuidedDenoiser:
-    """The options' guidance on a set of windows (``options`` resolved: its style guidance set); the
+    """The options' guidance on a set of windows (``options`` resolved: its guidance weights set); the
     music's default interval depends on whether any window has a style to guide."""
-    if options.style_guidance is None:
+    if options.guidance is None or options.style_guidance is None:
         raise ValueError("resolve the sampling options first (SamplingOptions.resolved)")
     return GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
                           interval=options.guided_steps(schedule.timesteps, guides_style(options.style_guidance, keep_style)),

@@ -36,6 +36,7 @@ def train(
     contact_source: Optional[str] = typer.Option(None, help="sgmd: contacts the foot term pins: predicted (the model's own, EDGE; default) or target (the data's)."),
     stepping_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the feet's world speeds against the data's, in (m/s)^2 (default 0: off)."),
     leg_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the legs' rotation channels inside the x0 term (default 1: as every channel)."),
+    root_speed_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the root's horizontal speed against the data's, direction-free, in (m/s)^2 (default 0: off)."),
     init_from: Optional[Path] = typer.Option(None, help="sgmd: fine-tune from this training state (same network; its step count carries on)."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
@@ -69,7 +70,7 @@ def train(
              "mirror": mirror, "genre_balance": genre_balance, "rhythm": rhythm, "prediction": prediction,
              "sigma_data": sigma_data, "snr_gamma": snr_gamma, "reconstruction_weight": reconstruction_weight,
              "foot_weight": foot_weight, "contact_source": contact_source, "stepping_weight": stepping_weight,
-             "leg_weight": leg_weight,
+             "leg_weight": leg_weight, "root_speed_weight": root_speed_weight,
              "init_from": None if init_from is None else str(init_from),
              "stretch": None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18"),
              "turns": None if turns is None else _numbers("--turns", turns, "0,90,180,270")}
