@@ -4,9 +4,10 @@
 
 The bundled SGMD model (or CHECKPOINT) dances every M2D test window once (seed 0, DDIM 10, the
 window's genre as the style), or the bundled ChoreoGraph does (no style, as scripts/evaluate_graph.py
-scores it); each dance is finished as `choreo generate` finished it before footsteps (speed
-limit, beat lock), then each setting (trigger m : swing s : lift m : strength) plans steps on the
-same finished dances. Each row ends with the median root speed per genre (real in brackets).
+scores it); the same dances are finished as `choreo generate` finishes them (speed limit,
+footsteps, beat lock, speed limit) once per setting of the step planner (trigger m : swing s :
+lift m : strength), and once without footsteps. Each row ends with the median root speed and the
+foot-root correlation per genre (real in brackets).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from pathlib import Path
 
 from choreo import load_backend
 from choreo.datasets import load_dataset
-from choreo.finishing import StepConfig, finish, planted_steps
+from choreo.finishing import StepConfig, finish
 from choreo.metrics.evaluate import Dance
 from choreo.datasets import TEST, select_split
 from choreo.metrics.protocol import (TABLE_HEADER, ScoringSet, generate_window_motions, music_beats, score, table_row,
@@ -44,7 +45,6 @@ def main() -> None:
     motions = generate_window_motions(backend, scoring.windows, with_style=sgmd, seed=args.seed,
                                       options={"steps": 10} if sgmd else {},
                                       log_mels=scoring.log_mels() if backend.listens_to_spectrum else None)
-    finished = [finish(m, music_beats(w.features), footsteps=False) for w, m in zip(scoring.windows, motions)]
     genres = [w.genre for w in scoring.windows]
     real = [d.positions for d in windows_as_dances(select_split(clips, TEST))]
 
@@ -54,12 +54,12 @@ def main() -> None:
               + f" <!-- {root_speeds_by_genre([d.positions for d in as_dances], real, genres, 30.0)} -->", flush=True)
 
     print(TABLE_HEADER.format(label="setting"))
-    row("none (finished)", finished)
+    row("none (finished)", [finish(m, music_beats(w.features), footsteps=False) for w, m in zip(scoring.windows, motions)])
     for setting in args.settings:
         trigger, swing, lift, strength = map(float, setting.split(":"))
         config = StepConfig(trigger=trigger, swing_seconds=swing, lift=lift, strength=strength)
         started = time.perf_counter()
-        stepped = [planted_steps(m, config=config) for m in finished]
+        stepped = [finish(m, music_beats(w.features), step_config=config) for w, m in zip(scoring.windows, motions)]
         row(f"{setting} ({time.perf_counter() - started:.1f} s)", stepped)
 
 

@@ -13,7 +13,7 @@ from .steps import StepConfig, steps as planted_steps
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | None = None, *,
            beat: bool = True, foot: bool = False, speed: bool = True, footsteps: bool = True,
-           legs_fixed: np.ndarray | None = None) -> Motion:
+           legs_fixed: np.ndarray | None = None, step_config: StepConfig = StepConfig()) -> Motion:
     """The passes as `choreo generate` applies them by default: speed limit, footsteps, beat lock (and,
     when asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
     The speed limit goes first, so that a glitch is not taken for a motion beat, and last, since
@@ -21,11 +21,12 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | No
     move the motion beats (a leg's swing is part of the body's speed), and a re-timing keeps a
     standing foot standing; after it they cost the beat-rate lock 5-9 points (docs/results.md, "Feet").
     Footsteps turn only the legs, so they keep the frames in ``legs_fixed`` (where a leg rotation
-    was given; default ``fixed``), not every given frame."""
+    was given; default ``fixed``), not every given frame. ``step_config``: the step planner's
+    settings (scripts/experiments/footsteps_settings.py compares them)."""
     if speed:
         motion = speed_limit(motion, fixed)
     if footsteps:
-        motion = planted_steps(motion, fixed if legs_fixed is None else legs_fixed)
+        motion = planted_steps(motion, fixed if legs_fixed is None else legs_fixed, step_config)
     if beat:
         motion = beat_lock(motion, music_beat_frames, fixed).motion
     if foot:
