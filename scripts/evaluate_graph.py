@@ -22,7 +22,7 @@ from choreo import load_backend
 from choreo.datasets import TEST, TRAIN, load_dataset, select_split
 from choreo.generator import Generator
 from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row, windows_as_dances
-from choreo.metrics.stepping import root_speeds_by_genre
+from choreo.metrics.stepping import pace_and_feet_by_genre
 from choreo_graph import (DEFAULT_CHECKPOINT, GraphConfig, dataset_generator, music_windows, replayed_nodes,
                           select_candidates)
 
@@ -110,7 +110,7 @@ def main() -> None:
                 label = (f"{variant}, K={top_k}{', finished' if finished else ''}{', no footsteps' if finished and not footsteps else ''} "
                          f"({time.perf_counter() - started:.0f} s)")
                 print(table_row(label, report)
-                      + f" <!-- {root_speeds_by_genre([d.positions for d in dances], real, genres, 30.0)} -->", flush=True)
+                      + f" <!-- {pace_and_feet_by_genre([d.positions for d in dances], real, genres, 30.0)} -->", flush=True)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from choreo.datasets import TEST, TRAIN, load_dataset, select_split
 from choreo import load_backend
 from choreo.metrics.genre import GenreClassifier
 from choreo_sgmd import FREE_MUSIC_GUIDANCE
-from choreo.metrics.stepping import root_speeds_by_genre
+from choreo.metrics.stepping import pace_and_feet_by_genre
 from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score, score_generator, scoring_windows, table_row, windows_as_dances
 
 REPO = Path(__file__).resolve().parents[1]
@@ -85,7 +85,7 @@ def main() -> None:
                                                      footsteps=footsteps)
                     recognised = classifier.agreement([d.positions for d in dances], genres)
                     print(table_row(label + (", finished" if finished else "") + (", no footsteps" if finished and not footsteps else ""), report)
-                          + f" <!-- genre recognised {100 * recognised:.1f} %, {root_speeds_by_genre([d.positions for d in dances], [d.positions for d in real], genres, 30.0)}, "
+                          + f" <!-- genre recognised {100 * recognised:.1f} %, {pace_and_feet_by_genre([d.positions for d in dances], [d.positions for d in real], genres, 30.0)}, "
                           f"{time.time() - started:.0f} s -->", flush=True)
                     if args.by_genre:
                         print_by_genre(label + (", finished" if finished else ""), windows, dances, train_clips)

@@ -5,7 +5,7 @@ import pytest
 
 from choreo.metrics import evaluate
 from choreo.metrics.evaluate import Dance
-from choreo.metrics.stepping import PLANTED_SPEED, pooled, root_speeds_by_genre, stepping
+from choreo.metrics.stepping import PLANTED_SPEED, pooled, pace_and_feet_by_genre, stepping
 from choreo.skeleton import LEFT_ANKLE_FOOT, RIGHT_ANKLE_FOOT
 
 FPS = 30.0
@@ -104,7 +104,7 @@ def test_by_genre_reports_each_genres_pace_and_feet_beside_the_real_ones():
     root = np.cumsum(pace) / FPS
     skater = body(root, root, root)  # feet travel with the root: correlation 1
     slow = body(0.5 * t, 0.5 * t + 0.1, 0.5 * t - 0.1)  # constant pace 0.5 m/s: no correlation to take
-    line = root_speeds_by_genre([skater, slow], [slow, skater], ["rumba", "waltz"], FPS)
+    line = pace_and_feet_by_genre([skater, slow], [slow, skater], ["rumba", "waltz"], FPS)
     speeds, feet = line.split("; ")
     assert speeds == f"root m/s rumba {np.median(pace[1:]):.2f} (0.50), waltz 0.50 ({np.median(pace[1:]):.2f})"
     assert feet == "foot~root rumba 1.00 (nan), waltz nan (1.00)"

@@ -24,7 +24,7 @@ from choreo.metrics.evaluate import Dance
 from choreo.datasets import TEST, select_split
 from choreo.metrics.protocol import (TABLE_HEADER, ScoringSet, generate_window_motions, music_beats, score, table_row,
                                      windows_as_dances)
-from choreo.metrics.stepping import root_speeds_by_genre
+from choreo.metrics.stepping import pace_and_feet_by_genre
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -51,7 +51,7 @@ def main() -> None:
     def row(label: str, dances) -> None:
         as_dances = [Dance(w.clip, m.joint_positions(), music_beats(w.features)) for w, m in zip(scoring.windows, dances)]
         print(table_row(label, score(as_dances, scoring.reference))
-              + f" <!-- {root_speeds_by_genre([d.positions for d in as_dances], real, genres, 30.0)} -->", flush=True)
+              + f" <!-- {pace_and_feet_by_genre([d.positions for d in as_dances], real, genres, 30.0)} -->", flush=True)
 
     print(TABLE_HEADER.format(label="setting"))
     row("none (finished)", [finish(m, music_beats(w.features), footsteps=False) for w, m in zip(scoring.windows, motions)])

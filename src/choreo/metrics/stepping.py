@@ -89,7 +89,7 @@ def median_root_speed(dances: list[np.ndarray], fps: float) -> float:
     return float(np.median(np.concatenate(speeds))) if speeds else float("nan")
 
 
-def root_speeds_by_genre(dances: list[np.ndarray], real: list[np.ndarray], genres: list[str], fps: float) -> str:
+def pace_and_feet_by_genre(dances: list[np.ndarray], real: list[np.ndarray], genres: list[str], fps: float) -> str:
     """"root m/s cha-cha 0.32 (0.50), ...; foot~root cha-cha 0.34 (0.15), ...": each genre's median
     horizontal root speed and foot-root correlation, real dancers' on the same windows in brackets.
     Per genre because the genres differ: real waltz (captured at 5.9 fps, interpolated) has a
