@@ -101,6 +101,19 @@ def test_fixed_frames_stay_exact_and_the_correction_fades_in():
     assert steps(motion, np.ones(motion.num_frames, bool)) is motion
 
 
+def test_fixed_weights_ramp_from_the_nearest_fixed_frame():
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        fixed = rng.random(int(rng.integers(1, 400))) < rng.choice([0.005, 0.05, 0.5])
+        frames = np.arange(len(fixed))
+        if fixed.any():  # what the weights were before: a frames x fixed-frames table
+            nearest = np.abs(frames[:, None] - np.flatnonzero(fixed)[None]).min(axis=1)
+            expected = np.clip(nearest / 9.0, 0.0, 1.0)
+        else:
+            expected = np.ones(len(fixed))
+        np.testing.assert_array_equal(fixed_weights(fixed, FPS, 0.3), expected)
+
+
 def test_other_skeletons_and_short_dances_pass_through():
     from choreo.skeleton import Skeleton
 
