@@ -35,9 +35,10 @@ class LossTerms:
     def total(self, config: DiffusionConfig) -> torch.Tensor:
         total = (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
                  + config.joint_weight * self.joints + config.foot_weight * self.foot)
-        if config.stepping_weight:
-            total = total + config.stepping_weight * self.stepping
-        return total + config.root_speed_weight * self.root_speed if config.root_speed_weight else total
+        for weight, term in ((config.stepping_weight, self.stepping), (config.root_speed_weight, self.root_speed)):
+            if weight:  # the terms most runs leave off
+                total = total + weight * term
+        return total
 
 
 def joint_positions(vectors: torch.Tensor) -> torch.Tensor:

@@ -62,10 +62,11 @@ def phase_cues(samples: np.ndarray, bpm: float) -> dict[str, float]:
     beats = np.arange(period, mel.shape[1] - period - 1, period)
     between = beats + period / 2
     percussive = percussive_part(mel)
-    envelopes = {"percussive": power_to_db(percussive), "harmonic": power_to_db(np.maximum(mel - percussive, 0.0)),
-                 "low bands": power_to_db(mel[:8])}
-    cues = {name: peak_mean(e, beats) / peak_mean(e, between)
-            for name, e in ((k, onset_strength(v, ENVELOPE_FFT, BEAT_HOP, ONSET_LAG)) for k, v in envelopes.items())}
+    bands = {"percussive": percussive, "harmonic": np.maximum(mel - percussive, 0.0), "low bands": mel[:8]}
+    cues = {}
+    for name, power in bands.items():
+        onsets = onset_strength(power_to_db(power), ENVELOPE_FFT, BEAT_HOP, ONSET_LAG)
+        cues[name] = peak_mean(onsets, beats) / peak_mean(onsets, between)
     change = chord_change(samples, mel.shape[1], round(period / 2))
     cues["chord change"] = change[np.round(beats).astype(int)].mean() / change[np.round(between).astype(int)].mean()
     return cues
