@@ -85,7 +85,8 @@ def test_inpainting_keeps_every_frame_outside_the_range_and_regenerates_inside(g
 
 def test_the_guide_places_each_node_where_the_assembly_plays_it(graph, music, monkeypatch):
     """The path cost prices each candidate by where the guide thinks its root will be; that must
-    be where the assembled dance puts it (up to the 6 cross-faded frames after a jump)."""
+    be where the assembled dance puts it, on the fractional frames the assembly plays (rounding
+    them drifted the placement by up to 17 cm over a song's jumps)."""
     predicted = {}
     cost, chose = Guide.cost, Guide.chose
 
@@ -109,7 +110,7 @@ def test_the_guide_places_each_node_where_the_assembly_plays_it(graph, music, mo
     ends = [t for t in predicted if (t + 1) * NODE_FRAMES <= music.num_frames]
     assembled = dance.root_positions[[(t + 1) * NODE_FRAMES - 1 for t in ends]][:, [0, 2]]
     error = np.linalg.norm(assembled - np.array([predicted[t] for t in ends]), axis=-1)
-    assert len(ends) >= 10 and error.max() < 0.03
+    assert len(ends) >= 10 and error.max() < 0.003
     np.testing.assert_allclose(dance.root_positions[0, [0, 2]], [1.0, 2.0], atol=1e-9)
 
 

@@ -56,10 +56,24 @@ def given_motion(frames=90, seed=1) -> Motion:
     return Motion.from_axis_angle(root, rng.normal(scale=0.2, size=(frames, 24, 3)), fps=30.0)
 
 
+def literal_between(frame):
+    """The whole frames around a fractional clip frame (clamped to the clip) and the later one's weight."""
+    frame = min(max(float(frame), 0.0), CLIP_FRAMES - 1.0)
+    before = int(np.floor(frame))
+    return before, min(before + 1, CLIP_FRAMES - 1), frame - before
+
+
 def literal_played_root(repertoire, clip, frame, angle, offset):
-    frame = min(max(int(np.rint(frame)), 0), CLIP_FRAMES - 1)
-    x, _, z = repertoire.root_positions[clip, frame].astype(np.float64)
+    before, after, w = literal_between(frame)
+    x, _, z = (1 - w) * repertoire.root_positions[clip, before].astype(np.float64) + w * repertoire.root_positions[clip, after]
     return np.array([np.cos(angle) * x + np.sin(angle) * z + offset[0], 0.0, -np.sin(angle) * x + np.cos(angle) * z + offset[2]])
+
+
+def literal_facing(repertoire, clip, frame):
+    before, after, w = literal_between(frame)
+    a, b = float(repertoire.facing[clip, before]), float(repertoire.facing[clip, after])
+    turn = (b - a + np.pi) % (2 * np.pi) - np.pi  # the short way round
+    return a + w * turn
 
 
 def test_given_poses_are_frames_with_every_joint_and_the_root_height_given(repertoire):
@@ -98,17 +112,16 @@ def literal_placements(guide, repertoire, clips, first, follows, current):
         target, yaw = guide.start
     else:
         rate = max(float(current.frames[-1] - current.frames[-2]), 0.5)
-        ahead = min(max(round(float(current.frames[-1]) + rate), 0), CLIP_FRAMES - 1)
+        ahead = float(current.frames[-1]) + rate
         target = literal_played_root(repertoire, current.clip, ahead, guide.placement.angle, guide.placement.offset)
-        yaw = guide.placement.angle + repertoire.facing[current.clip, ahead]
+        yaw = guide.placement.angle + literal_facing(repertoire, current.clip, ahead)
     angles, offsets = [], []
     for clip, frame, continues in zip(clips, first, follows):
         if continues and current is not None and guide.placement is not None:
             angles.append(guide.placement.angle)
             offsets.append(guide.placement.offset)
             continue
-        frame = min(max(int(np.rint(frame)), 0), CLIP_FRAMES - 1)
-        angle = yaw - repertoire.facing[clip, frame]
+        angle = yaw - literal_facing(repertoire, clip, frame)
         start = literal_played_root(repertoire, clip, frame, angle, np.zeros(3))
         angles.append(angle)
         offsets.append((target - start) * [1, 0, 1])
@@ -141,7 +154,7 @@ def test_candidates_are_placed_where_the_walk_would_play_them(repertoire):
     np.testing.assert_allclose(angles, want_angles, atol=1e-9)
 
 
-def test_placed_roots_clamp_frames_to_the_clip(repertoire):
+def test_placed_roots_interpolate_fractional_frames_within_the_clip(repertoire):
     guide = Guide(Constraints.none(30, 30.0), repertoire, GraphConfig())
     frames = np.array([[-1.0, 0.0, 0.6, 238.6, 239.0, 240.4]])
     placed = guide.placed_roots(np.array([0]), frames, np.array([0.3]), np.array([[1.0, 5.0, -2.0]]))

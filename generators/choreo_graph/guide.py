@@ -98,18 +98,17 @@ class Guide:
 
     def placements(self, clips: np.ndarray, first: np.ndarray, follows: np.ndarray, current):
         """(angles (C,), offsets (C, 3)) each candidate would be played with (see the module doc)."""
-        repertoire, last = self.repertoire, self.repertoire.root_positions.shape[1] - 1
-        first = np.clip(np.rint(first).astype(int), 0, last)
+        repertoire = self.repertoire
         if current is None or self.placement is None:
             target, yaw = self.start
         else:
             rate = max(float(current.frames[-1] - current.frames[-2]), 0.5)
-            ahead = int(np.clip(round(float(current.frames[-1]) + rate), 0, last))
-            target = self.placed_roots(np.array([current.clip]), np.array([[ahead]]), np.array([self.placement.angle]),
+            ahead = np.array([[float(current.frames[-1]) + rate]])
+            target = self.placed_roots(np.array([current.clip]), ahead, np.array([self.placement.angle]),
                                        self.placement.offset[None])[0, 0]
-            yaw = self.placement.angle + float(repertoire.facing[current.clip, ahead])
-        angles = yaw - repertoire.facing[clips, first]
-        starts = rotate_about_y(repertoire.root_positions[clips, first].astype(np.float64), angles)
+            yaw = self.placement.angle + float(facing_at(repertoire, np.array([current.clip]), ahead[0])[0])
+        angles = yaw - facing_at(repertoire, clips, first)
+        starts = rotate_about_y(roots_at(repertoire, clips[:, None], first[:, None])[:, 0], angles)
         offsets = (target - starts) * np.array([1.0, 0.0, 1.0])
         if current is not None and self.placement is not None:
             angles[follows], offsets[follows] = self.placement.angle, self.placement.offset
@@ -117,9 +116,31 @@ class Guide:
 
     def placed_roots(self, clips: np.ndarray, frames: np.ndarray, angles: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """(C, F, 3) floor positions (y = 0) of the root on clip ``frames`` (C, F) when played so."""
-        played = np.clip(np.rint(frames).astype(int), 0, self.repertoire.root_positions.shape[1] - 1)
-        roots = self.repertoire.root_positions[clips[:, None], played].astype(np.float64)
+        roots = roots_at(self.repertoire, clips[:, None], frames)
         return (rotate_about_y(roots, angles[:, None]) + offsets[:, None]) * np.array([1.0, 0.0, 1.0])
+
+
+def between_frames(frames: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The whole frames on either side of fractional clip ``frames`` and the weight of the later one:
+    the assembly plays fractional frames, and rounding them drifts the placement a few cm per jump."""
+    frames = np.clip(np.asarray(frames, np.float64), 0, count - 1)
+    before = np.floor(frames).astype(int)
+    return before, np.minimum(before + 1, count - 1), frames - before
+
+
+def roots_at(repertoire: Repertoire, clips: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """Root positions (..., 3) of ``clips`` at fractional ``frames`` (broadcast together)."""
+    before, after, weight = between_frames(frames, repertoire.root_positions.shape[1])
+    start = repertoire.root_positions[clips, before].astype(np.float64)
+    return start + (repertoire.root_positions[clips, after] - start) * weight[..., None]
+
+
+def facing_at(repertoire: Repertoire, clips: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """Headings (radians) of ``clips`` at fractional ``frames``, turning the short way between frames."""
+    before, after, weight = between_frames(frames, repertoire.facing.shape[1])
+    start = repertoire.facing[clips, before]
+    turn = np.angle(np.exp(1j * (repertoire.facing[clips, after] - start)))
+    return start + turn * weight
 
 
 def priced(frames: np.ndarray) -> np.ndarray:
