@@ -6,8 +6,10 @@
 One 5 s dance per test window (2.5 s stride, as the reference row), danced from that window's
 music alone; one markdown row per variant: the full method, the paper's two ablations (without
 re-tempo: each clip's middle 4 s unwarped; motion graph: first node of each segment only) and
-ours (no repeat cost; raw-warp: the DTW warps played unsmoothed, as the paper; smooth-4: a lighter smoothing). ``--whole-songs`` also dances every test song whole and counts the seconds
-that replay what was danced in the 30 s before, with and without the repeat cost.
+ours (no repeat cost; raw-warp: the DTW warps played unsmoothed, as the paper; smooth-4 / 16 / 32: other
+smoothings; greedy: the paper's deterministic walk, no take variation; vary-0.3: three times the variation).
+``--genre-style`` gives each window's genre as the style, so the graph dances that genre's clips only.
+``--whole-songs`` also dances every test song whole and counts the seconds that replay what was danced in the 30 s before, with and without the repeat cost.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ from choreo_graph import (DEFAULT_CHECKPOINT, GraphConfig, dataset_generator, mu
 REPO = Path(__file__).resolve().parents[1]
 VARIANTS = {"full": {}, "no-retempo": {"retempo": False}, "motion-graph": {"dynamic": False},
             "no-repeat-cost": {"repeat_cost": 0.0}, "raw-warp": {"warp_smoothing": 0.0},
-            "smooth-4": {"warp_smoothing": 4.0}}
+            "smooth-4": {"warp_smoothing": 4.0}, "smooth-16": {"warp_smoothing": 16.0},
+            "smooth-32": {"warp_smoothing": 32.0}, "greedy": {"take_variation": 0.0}, "vary-0.3": {"take_variation": 0.3}}
 
 
 def selector_genre_precision(generator: Generator, windows, mels, ks=(1, 64)) -> str:
@@ -74,6 +77,8 @@ def main() -> None:
                         help="also score each dance after the beat lock (choreo.finishing), side by side")
     parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--genre-style", action="store_true",
+                        help="give each window's genre as the style (the graph then dances only that genre's clips)")
     parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without the step planner (choreo.finishing.steps)")
     args = parser.parse_args()
 
@@ -105,7 +110,7 @@ def main() -> None:
             for finished, footsteps in [(False, False), *([(True, False)] if args.finished and args.no_footsteps else []),
                                         *([(True, True)] if args.finished else [])]:
                 started = time.perf_counter()
-                report, dances = score_generator(generator, scoring, with_style=False, seed=args.seed, options=options, finished=finished,
+                report, dances = score_generator(generator, scoring, with_style=args.genre_style, seed=args.seed, options=options, finished=finished,
                                             foot_lock=args.foot_lock, footsteps=footsteps)
                 label = (f"{variant}, K={top_k}{', finished' if finished else ''}{', no footsteps' if finished and not footsteps else ''} "
                          f"({time.perf_counter() - started:.0f} s)")

@@ -519,7 +519,7 @@ class LiteralGraph:
 
     def __init__(self, repertoire, config, seed=0):
         self.rep, self.config = repertoire, config
-        self.rng = np.random.default_rng(seed) if seed and config.take_variation > 0 else None
+        self.rng = np.random.default_rng(seed) if config.take_variation > 0 else None
         self.segments, self.current, self.played = {}, None, []
 
     def step(self, t, music_style):
@@ -657,25 +657,26 @@ def test_repeat_cost_counts_a_node_from_its_first_to_its_last_frame():
     assert g.played[-1][0] == 4 and g.played[-1][1].tolist() == [3, 60, 89]
 
 
-def test_search_graph_is_the_papers_take_unless_seeded():
+def test_every_seed_is_a_take_and_no_variation_is_the_papers_walk():
     rng = np.random.default_rng(12)
     rep = toy_repertoire(4, clips=6)
     candidates = rng.integers(0, 6, (8, 3))
     warps = random_warps(rng, 24).reshape(8, 3, 120)
     windows = MusicWindows(rng.random((8, 2)), np.zeros(8), np.zeros((8, 120)))
-    config = GraphConfig(take_variation=5.0, repeat_cost=0.0)
-    key = lambda path: [(n.segment, n.index) for n in path]  # noqa: E731
-    plain = key(search_graph(windows, candidates, warps, rep, config))
-    assert plain == key(search_graph(windows, candidates, warps, rep, config, seed=0))
-    assert plain != key(search_graph(windows, candidates, warps, rep, config, seed=1))
+    def take(variation: float, seed: int) -> list:
+        config = GraphConfig(take_variation=variation, repeat_cost=0.0)
+        return [(n.segment, n.index) for n in search_graph(windows, candidates, warps, rep, config, seed)]
+
+    assert take(5.0, 0) == take(5.0, 0)  # a take is repeatable
+    assert take(5.0, 0) != take(0.0, 0)  # seed 0 is a take too
+    assert take(5.0, 0) != take(5.0, 1)
+    assert take(0.0, 0) == take(0.0, 1)  # without variation the seed changes nothing
 
 
-def test_take_variation_needs_a_seed_and_a_weight():
+def test_take_variation_needs_a_weight():
     rep = toy_repertoire()
-    assert DynamicGraph(rep, GraphConfig(), seed=0).rng is None
-    assert DynamicGraph(rep, GraphConfig()).rng is None  # the paper's take unless asked
+    assert DynamicGraph(rep, GraphConfig(), seed=0).rng is not None
     assert DynamicGraph(rep, GraphConfig(take_variation=0.0), seed=4).rng is None
-    assert DynamicGraph(rep, GraphConfig(take_variation=0.1), seed=4).rng is not None
 
 
 def path_of(spec):

@@ -117,7 +117,7 @@ class DynamicGraph:
 
     def __init__(self, repertoire: Repertoire, config: GraphConfig, seed: int = 0, guide: "Guide | None" = None):
         self.repertoire, self.config, self.guide = repertoire, config, guide
-        self.rng = np.random.default_rng(seed) if seed and config.take_variation > 0 else None
+        self.rng = np.random.default_rng(seed) if config.take_variation > 0 else None
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))
         self.current: Node | None = None
         self.played: deque[tuple[int, np.ndarray]] = deque()  # (second, source span of the node played)
@@ -158,7 +158,7 @@ class DynamicGraph:
         if self.guide is not None:
             played = warps[np.arange(len(clips))[:, None], (index * NODE_FRAMES)[:, None] + np.arange(NODE_FRAMES)]
             cost += self.guide.cost(t, clips, played, follows, current)
-        if self.rng is not None:  # another take: near-equal choices fall another way
+        if self.rng is not None:  # this take: near-equal choices fall one way or another
             cost += config.take_variation * cost.std() * self.rng.standard_normal(len(cost))
         best = int(cost.argmin())
         if self.guide is not None:

@@ -41,7 +41,9 @@ def graph_dance(
     no_retempo: bool = typer.Option(False, "--no-retempo", help="Ablation: use each clip's middle 4 s unwarped."),
     warp_smoothing: Optional[float] = typer.Option(None, help="Sigma (frames) smoothing each clip's re-timing (default 8); "
                                                    "0 = the paper's raw DTW path: feet slide twice as much, motion beats recur more regularly."),
-    seed: int = typer.Option(0, help="0: the paper's deterministic walk; any other seed: another take of the same song."),
+    take_variation: Optional[float] = typer.Option(None, help="Noise, as a share of the costs' spread, that each second of the walk "
+                                                   "draws from --seed (default 0.1); 0 = the paper's deterministic greedy walk."),
+    seed: int = typer.Option(0, help="Which take of the song: each seed is another walk through the repertoire."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
@@ -58,12 +60,13 @@ def graph_dance(
     """
     from ..errors import ParameterError
 
-    if top_k < 1 or (warp_smoothing is not None and warp_smoothing < 0):
-        raise ParameterError("--top-k must be at least 1 and --warp-smoothing at least 0")
+    if top_k < 1 or any(value is not None and value < 0 for value in (warp_smoothing, take_variation)):
+        raise ParameterError("--top-k must be at least 1, --warp-smoothing and --take-variation at least 0")
     settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
                         speed_limit, beats=beat_source(bpm, beats, beat_tracker), threads=threads, footsteps=footsteps)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
-                           **({} if warp_smoothing is None else {"warp_smoothing": warp_smoothing}))
+                           **{key: value for key, value in (("warp_smoothing", warp_smoothing), ("take_variation", take_variation))
+                              if value is not None})
     dance_one(backend, song, output, settings)
 
 
