@@ -155,11 +155,12 @@ class DynamicGraph:
                 cost += config.completeness_cost * completeness
         last = warps[np.arange(len(clips)), index * NODE_FRAMES + NODE_FRAMES - 1]
         cost += self.repeat_cost(t, source_spans(repertoire, clips, first, last))
+        spread = cost.std()  # the dance's own costs: a take varies the dance, not how closely it keeps to constraints
         if self.guide is not None:
             played = warps[np.arange(len(clips))[:, None], (index * NODE_FRAMES)[:, None] + np.arange(NODE_FRAMES)]
             cost += self.guide.cost(t, clips, played, follows, current)
         if self.rng is not None:  # this take: near-equal choices fall one way or another
-            cost += config.take_variation * cost.std() * self.rng.standard_normal(len(cost))
+            cost += config.take_variation * spread * self.rng.standard_normal(len(cost))
         best = int(cost.argmin())
         if self.guide is not None:
             self.guide.chose(best)
