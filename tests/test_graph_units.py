@@ -673,10 +673,13 @@ def test_every_seed_is_a_take_and_no_variation_is_the_papers_walk():
     assert take(0.0, 0) == take(0.0, 1)  # without variation the seed changes nothing
 
 
-def test_take_variation_needs_a_weight():
+def test_take_variation_needs_a_weight_and_under_constraints_a_seed():
     rep = toy_repertoire()
     assert DynamicGraph(rep, GraphConfig(), seed=0).rng is not None
     assert DynamicGraph(rep, GraphConfig(take_variation=0.0), seed=4).rng is None
+    guide = SimpleNamespace()  # any guide: the walk is under constraints
+    assert DynamicGraph(rep, GraphConfig(), seed=0, guide=guide).rng is None  # the greedy walk
+    assert DynamicGraph(rep, GraphConfig(), seed=3, guide=guide).rng is not None
 
 
 def path_of(spec):

@@ -58,9 +58,10 @@ class GraphConfig:
     dtw_stride: int = 2  # warp on every 2nd frame (15 fps), then interpolate the path
     blend_frames: int = 6  # cross-fade length where the graph jumps between segments
     warp_smoothing: float = 8.0  # sigma (frames) of the Gaussian that smooths each DTW warp (PFC 2.07 -> 1.00)
-    # Each second's costs get noise of this x their spread, drawn from the seed: every seed is a take, 0 too. 0 here is
-    # the paper's deterministic greedy walk, which plays the same few clips whatever the music, with a higher FID_g and
-    # more gliding feet than its takes (docs/results.md, "ChoreoGraph", "Every seed is a take").
+    # Each second's costs get noise of this x their spread, drawn from the seed: every seed of a free dance is a take, 0
+    # too (under constraints seed 0 is the greedy walk: graph.DynamicGraph). 0 here is the paper's deterministic greedy
+    # walk, which plays the same few clips whatever the music, with a higher FID_g and more gliding feet than its takes
+    # (docs/results.md, "ChoreoGraph", "Every seed is a take").
     take_variation: float = 0.1
     repeat_cost: float = 100.0  # not in the paper: replaying source frames danced recently (see graph.py)
     repeat_memory: int = 30  # seconds a played node's source frames stay "recent"

@@ -117,7 +117,10 @@ class DynamicGraph:
 
     def __init__(self, repertoire: Repertoire, config: GraphConfig, seed: int = 0, guide: "Guide | None" = None):
         self.repertoire, self.config, self.guide = repertoire, config, guide
-        self.rng = np.random.default_rng(seed) if config.take_variation > 0 else None
+        # Every seed of a free dance is a take; under constraints seed 0 is the greedy walk, which keeps closer to
+        # them with lower PFC (docs/results.md, "The graph under constraints").
+        varied = config.take_variation > 0 and (seed != 0 or guide is None)
+        self.rng = np.random.default_rng(seed) if varied else None
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))
         self.current: Node | None = None
         self.played: deque[tuple[int, np.ndarray]] = deque()  # (second, source span of the node played)
