@@ -9,7 +9,8 @@ re-tempo: each clip's middle 4 s unwarped; motion graph: first node of each segm
 ours (no repeat cost; raw-warp: the DTW warps played unsmoothed, as the paper; smooth-4 / 16 / 32: other
 smoothings; greedy: the paper's deterministic walk, no take variation; vary-0.3: three times the variation).
 ``--genre-style`` gives each window's genre as the style, so the graph dances that genre's clips only.
-``--whole-songs`` also dances every test song whole and counts the seconds that replay what was danced in the 30 s before, with and without the repeat cost.
+``--whole-songs`` also dances every test song whole and counts the seconds that replay what was
+danced in the 30 s before, with and without the repeat cost.
 """
 
 from __future__ import annotations

@@ -663,6 +663,7 @@ def test_every_seed_is_a_take_and_no_variation_is_the_papers_walk():
     candidates = rng.integers(0, 6, (8, 3))
     warps = random_warps(rng, 24).reshape(8, 3, 120)
     windows = MusicWindows(rng.random((8, 2)), np.zeros(8), np.zeros((8, 120)))
+
     def take(variation: float, seed: int) -> list:
         config = GraphConfig(take_variation=variation, repeat_cost=0.0)
         return [(n.segment, n.index) for n in search_graph(windows, candidates, warps, rep, config, seed)]
