@@ -20,6 +20,7 @@ import numpy as np
 
 from choreo.constraints import Constraints
 from choreo.motion import Motion
+from choreo.motion.motion import frames_between
 from choreo.motion.stitch import facing_yaw, frame_local_positions, rotate_about_y
 from choreo.skeleton import SMPL24
 
@@ -120,24 +121,17 @@ class Guide:
         return (rotate_about_y(roots, angles[:, None]) + offsets[:, None]) * np.array([1.0, 0.0, 1.0])
 
 
-def between_frames(frames: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The whole frames on either side of fractional clip ``frames`` and the weight of the later one:
-    the assembly plays fractional frames, and rounding them drifts the placement a few cm per jump."""
-    frames = np.clip(np.asarray(frames, np.float64), 0, count - 1)
-    before = np.floor(frames).astype(int)
-    return before, np.minimum(before + 1, count - 1), frames - before
-
-
 def roots_at(repertoire: Repertoire, clips: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """Root positions (..., 3) of ``clips`` at fractional ``frames`` (broadcast together)."""
-    before, after, weight = between_frames(frames, repertoire.root_positions.shape[1])
+    """Root positions (..., 3) of ``clips`` at fractional ``frames`` (broadcast together), as the
+    assembly plays them: rounding the frames drifted the placement a few cm per jump."""
+    before, after, weight = frames_between(frames, repertoire.root_positions.shape[1])
     start = repertoire.root_positions[clips, before].astype(np.float64)
     return start + (repertoire.root_positions[clips, after] - start) * weight[..., None]
 
 
 def facing_at(repertoire: Repertoire, clips: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """Headings (radians) of ``clips`` at fractional ``frames``, turning the short way between frames."""
-    before, after, weight = between_frames(frames, repertoire.facing.shape[1])
+    before, after, weight = frames_between(frames, repertoire.facing.shape[1])
     start = repertoire.facing[clips, before]
     turn = np.angle(np.exp(1j * (repertoire.facing[clips, after] - start)))
     return start + turn * weight

@@ -16,6 +16,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from choreo.metrics.beats import motion_beats
+from choreo.motion.motion import frames_between
 
 from .config import TempoConfig
 
@@ -125,7 +126,6 @@ def random_time_warp(positions: np.ndarray, max_shift: int, rng: np.random.Gener
     target = np.concatenate([[0], moved[order], [frames - 1]]).astype(np.float64)
     keep = np.concatenate([[True], np.diff(target) > 0]) & np.concatenate([[True], np.diff(source) > 0])
     source_time = np.interp(np.arange(frames), target[keep], source[keep])
-    lower = np.floor(source_time).astype(int)
-    upper = np.minimum(lower + 1, frames - 1)
-    weight = (source_time - lower)[:, None, None]
+    lower, upper, weight = frames_between(source_time, frames)
+    weight = weight[:, None, None]
     return (1 - weight) * positions[lower] + weight * positions[upper]

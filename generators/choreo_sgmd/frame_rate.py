@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from choreo.motion.motion import frame_chunks
+from choreo.motion.motion import frame_chunks, frames_between
 from choreo.music import BEAT_COLUMN, PEAK_COLUMN
 
 EVENT_COLUMNS = (PEAK_COLUMN, BEAT_COLUMN)  # one-hot columns of the 35-d features (the rhythm channels come after)
@@ -64,9 +64,8 @@ def frames_at_full_rate(vectors: np.ndarray, stride: int, num_frames: int) -> np
     if stride == 1:
         return vectors[..., :num_frames, :]
     position = np.minimum(np.arange(num_frames) / stride, vectors.shape[-2] - 1)
-    lower = np.floor(position).astype(int)
-    upper = np.minimum(lower + 1, vectors.shape[-2] - 1)
-    weight = (position - lower)[:, None].astype(vectors.dtype)
+    lower, upper, weight = frames_between(position, vectors.shape[-2])
+    weight = weight[:, None].astype(vectors.dtype)
     out = np.empty((*vectors.shape[:-2], num_frames, vectors.shape[-1]), np.result_type(vectors.dtype, weight.dtype))
     for chunk in frame_chunks(num_frames):
         out[..., chunk, :] = vectors[..., lower[chunk], :] * (1 - weight[chunk]) + vectors[..., upper[chunk], :] * weight[chunk]

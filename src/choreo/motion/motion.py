@@ -197,13 +197,10 @@ class Motion:
         The building block of resampling and of time-warping (a warped clip is its frames read
         at a non-uniform pace).
         """
-        source_time = np.clip(np.asarray(source_frames, dtype=np.float64), 0, self.num_frames - 1)
-        lower = np.floor(source_time).astype(int)
-        upper = np.minimum(lower + 1, self.num_frames - 1)
-        weight = source_time - lower
+        lower, upper, weight = frames_between(source_frames, self.num_frames)
         root = (1 - weight)[:, None] * self.root_positions[lower] + weight[:, None] * self.root_positions[upper]
-        rotations = np.empty((len(source_time), self.num_joints, 4))
-        for chunk in frame_chunks(len(source_time)):  # a song's slerp temporaries at once would be large
+        rotations = np.empty((len(weight), self.num_joints, 4))
+        for chunk in frame_chunks(len(weight)):  # a song's slerp temporaries at once would be large
             rotations[chunk] = rot.quaternion_slerp(
                 self.rotations[lower[chunk]], self.rotations[upper[chunk]],
                 np.broadcast_to(weight[chunk, None], (len(weight[chunk]), self.num_joints)).copy(),
@@ -220,14 +217,21 @@ class Motion:
         return self.replace(skeleton=skeleton)
 
 
+def frames_between(frames, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(lower, upper, weight): the whole frames on either side of fractional ``frames``, clamped to
+    ``count`` frames, and the upper one's weight; how every linear read between frames here starts."""
+    frames = np.clip(np.asarray(frames, dtype=np.float64), 0, count - 1)
+    lower = np.floor(frames).astype(int)
+    return lower, np.minimum(lower + 1, count - 1), frames - lower
+
+
 def positions_at(joint_positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """(len(frames), J, 3) joints at fractional ``frames`` (clipped to the motion), linearly
     interpolated: cheap where speeds, not rotations, are what is read."""
     frames = np.clip(np.asarray(frames, dtype=np.float64), 0, len(joint_positions) - 1)
     out = np.empty((len(frames), *joint_positions.shape[1:]), np.result_type(joint_positions, np.float64))
     for chunk in frame_chunks(len(frames)):  # the temporaries of a song are large
-        lower = np.floor(frames[chunk]).astype(int)
-        upper = np.minimum(lower + 1, len(joint_positions) - 1)
-        weight = (frames[chunk] - lower)[:, None, None]
+        lower, upper, weight = frames_between(frames[chunk], len(joint_positions))
+        weight = weight[:, None, None]
         out[chunk] = (1 - weight) * joint_positions[lower] + weight * joint_positions[upper]
     return out
