@@ -250,3 +250,12 @@ def test_graph_training_refuses_resume_before_any_work(capsys, tmp_path):
     code, _, err = run_cli(capsys, "train", "graph", "--data", tmp_path, "--out", tmp_path / "run", "--resume")
     assert_one_line_error(code, err)
     assert "cannot resume" in err and not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("where", ["out", "out/inside"])
+def test_train_refuses_an_out_that_is_a_file_before_loading_any_data(capsys, tmp_path, where):
+    (tmp_path / "out").write_bytes(b"a file")
+    (tmp_path / "data").mkdir()  # empty: loading it would be a dataset error, not this one
+    code, _, err = run_cli(capsys, "train", "sgmd", "--data", tmp_path / "data", "--out", tmp_path / where)
+    assert_one_line_error(code, err, exit_code=3)
+    assert "exists and is not a folder" in err and (tmp_path / "out").read_bytes() == b"a file"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import tracemalloc
 
 import numpy as np
@@ -169,3 +170,35 @@ def test_positions_too_far_to_fit_are_a_dataset_error(tmp_path):
     (folder / "skeletons.json").write_text(json.dumps(data))
     with pytest.raises(DatasetError, match="beyond"):
         m2d.read_recording(folder)
+
+
+# Issue 48, item 1: cache entries are never written through a link planted at their name ----------
+
+@pytest.mark.parametrize("victim_kind", ["file", "fifo"])
+def test_a_link_planted_at_a_feature_entry_is_replaced_not_written_through(tmp_path, fake_music, victim_kind):
+    song, victim = tmp_path / "song.wav", tmp_path / "victim"
+    song.write_bytes(b"RIFF" + bytes(100))
+    victim.write_bytes(b"precious") if victim_kind == "file" else os.mkfifo(victim)  # a FIFO: reading never ends
+    cache.cached_music(song)
+    entry, = (tmp_path / "cache" / "features").iterdir()
+    entry.unlink()
+    entry.symlink_to(victim)  # a warm cache whose entries were swapped for links
+    cache.cached_music(song)
+    assert victim.read_bytes() == b"precious" if victim_kind == "file" else stat.S_ISFIFO(victim.stat().st_mode)
+    assert not entry.is_symlink() and entry.is_file() and fake_music.analysed == 2
+    assert cache.cached_music(song) is not None and fake_music.analysed == 2  # the new entry is used
+
+
+def test_a_link_planted_at_an_m2d_fit_entry_is_replaced_not_written_through(tmp_path, monkeypatch):
+    monkeypatch.setenv("CHOREO_CACHE_DIR", str(tmp_path / "cache"))
+    fit = {"rotations": np.zeros((40, 24, 4), np.float32), "offsets": np.zeros((24, 3))}
+    monkeypatch.setattr(m2d, "fit_recording", lambda recording: fit)
+    recording = m2d.read_recording(clip(tmp_path))
+    victim = tmp_path / "victim.txt"
+    victim.write_bytes(b"precious")
+    entry = m2d._fit_cache_path(tmp_path / "DANCE_C_1", recording.fps)
+    entry.parent.mkdir(parents=True)
+    entry.symlink_to(victim)
+    m2d.load_fit(tmp_path / "DANCE_C_1", recording)
+    assert victim.read_bytes() == b"precious" and not entry.is_symlink()
+    assert np.load(entry)["rotations"].shape == (40, 24, 4)

@@ -203,3 +203,20 @@ def test_a_full_disk_is_an_output_error_with_one_line(tmp_path, source):
     lines = [line for line in done.stderr.splitlines() if line.strip()]
     assert done.returncode == 3 and len(lines) == 1 and lines[0].startswith("choreo: error: cannot write"), lines
     assert sorted(p.name for p in tmp_path.iterdir()) == ["source.bvh"]
+
+
+# Issue 48, item 1: files no user names (the cache) never follow a link -----------------------------
+
+@pytest.mark.parametrize("follow_links", [True, False])
+def test_a_link_is_written_through_only_when_links_are_followed(tmp_path, follow_links):
+    victim, link = tmp_path / "victim.txt", tmp_path / "entry.npz"
+    victim.write_bytes(b"precious")
+    victim.chmod(0o600)
+    link.symlink_to(victim)
+    with atomic_output(link, follow_links=follow_links) as handle:
+        handle.write(b"new")
+    if follow_links:  # an output the user named: written through, the link kept
+        assert link.is_symlink() and victim.read_bytes() == b"new"
+    else:  # the link is replaced by a new file with the default mode; the victim is untouched
+        assert not link.is_symlink() and link.read_bytes() == b"new" and victim.read_bytes() == b"precious"
+        assert stat.S_IMODE(link.stat().st_mode) == 0o666 & ~os.umask(os.umask(0o022))

@@ -77,3 +77,40 @@ def test_use_threads_sets_torch(machine):
         assert threads.use_threads(1) == 1 and torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(before)
+
+
+# Issue 48, item 4: thread counts from --threads and the environment are capped at the allowed CPUs --
+
+def test_requested_and_environment_threads_are_capped_at_the_allowed_cpus(machine, monkeypatch):
+    assert threads.choose_threads(99_999) == 8 and threads.choose_threads(2**31) == 8  # was a segfault, an overflow
+    monkeypatch.setenv("OMP_NUM_THREADS", "99999")
+    assert threads.choose_threads() == 8
+    monkeypatch.setenv("OMP_NUM_THREADS", "\u00b2")  # a digit to str.isdigit, not to int()
+    assert threads.choose_threads() == 8
+
+
+@pytest.mark.parametrize("given, bounded", [("99999", "8"), ("3", "3"), ("99999,4", "8,4"), (" 12 ", "8"),
+                                            ("lots", "lots"), ("\u00b2", "\u00b2")])
+def test_omp_num_threads_is_capped_before_torch_loads(machine, monkeypatch, given, bounded):
+    monkeypatch.setenv("OMP_NUM_THREADS", given)
+    threads.bound_omp_threads()
+    assert os.environ["OMP_NUM_THREADS"] == bounded
+
+
+@pytest.mark.parametrize("setting", [{"OMP_NUM_THREADS": "99999"}, {"--threads": "99999"}, {"--threads": str(2**31)}])
+def test_huge_thread_counts_dance_on_the_allowed_cpus(tiny_checkpoint, tmp_path, setting):
+    import subprocess
+    import sys
+
+    import numpy as np
+    import soundfile as sf
+
+    song = tmp_path / "song.wav"
+    sf.write(song, np.random.default_rng(0).normal(scale=0.1, size=3 * 22050), 22050)
+    flags = ["--threads", setting["--threads"]] if "--threads" in setting else []
+    env = {**os.environ, "OMP_NUM_THREADS": setting.get("OMP_NUM_THREADS", "1")}
+    result = subprocess.run([sys.executable, "-m", "choreo", "generate", str(song), "-o", str(tmp_path / "d.npz"),
+                             "--checkpoint", str(tiny_checkpoint), "--steps", "2", *flags],
+                            env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-2000:]  # was a segmentation fault (139), or exit 70
+    assert (tmp_path / "d.npz").stat().st_size > 0

@@ -1,6 +1,9 @@
 """Beats the user gives (issue 36, part 1): ``--bpm N`` and ``--beats FILE`` on every dancing
 command, ``choreo info`` and ``choreo.dance``; bad input is one line, exit 2, and no output."""
 
+import time
+import tracemalloc
+
 import numpy as np
 import pytest
 import soundfile as sf
@@ -170,3 +173,38 @@ def test_generate_with_beats_locks_the_dance_onto_them(tmp_path, capsys, monkeyp
     np.testing.assert_array_equal(seen["targets"], given)
     assert seen["pairs"] and {music for _, music in seen["pairs"]} <= set(given.tolist())
     assert read_motion(out).metadata["beats"] == "beats.csv"
+
+
+# --- issue 48, item 3: size is checked before reading, and the file is parsed as a stream --------
+
+def test_a_beats_file_bigger_than_any_song_needs_is_refused_unread(tmp_path, capsys):
+    huge = tmp_path / "beats.txt"
+    with open(huge, "wb") as handle:  # 1.5 GB, sparse: nothing on disk, and nothing read
+        handle.truncate(1_500_000_000)
+    started = time.perf_counter()
+    with pytest.raises(InputError, match="more than a beats file holds"):
+        read_beat_file(huge)
+    out = tmp_path / "dance.npz"
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", out, "--beats", huge)
+    assert_one_line_error(code, err)
+    assert "more than a beats file holds" in err and not out.exists()
+    assert time.perf_counter() - started < 10
+
+
+def test_a_beats_file_under_the_size_limit_is_read_in_little_memory(tmp_path):
+    many = tmp_path / "beats.csv"
+    many.write_bytes(b"time,beat\n" + b"1.0,1\n" * 1_300_000)  # 7.8 MB: 1.3 million rows
+    tracemalloc.start()
+    try:
+        with pytest.raises(InputError, match="more than 360,000 beats"):
+            read_beat_file(many)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 16 << 20, peak  # was the whole text, then a list of cells per line (> 1 GB for 28 MB)
+
+
+def test_a_beats_line_longer_than_a_beat_is_refused(tmp_path):
+    (tmp_path / "beats.txt").write_text("0.5\n" + "1" * 5000 + "\n")
+    with pytest.raises(InputError, match="line 2: longer than 256 characters"):
+        read_beat_file(tmp_path / "beats.txt")

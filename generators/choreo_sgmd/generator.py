@@ -13,6 +13,7 @@ from choreo.constraints import Constraints, parse_style_schedule
 from choreo.errors import InputError, ParameterError
 from choreo.generator.options import parse_options
 from choreo.generator import GenerationRequest, Generator
+from choreo.generator.checkpoint import damaged_checkpoint
 from choreo.motion import Motion, vector_to_motion
 
 from .checkpoint import load_checkpoint
@@ -62,7 +63,7 @@ class SGMDGenerator(Generator):
         self.checkpoint = Path(checkpoint)
         if not use_ema and "state_dict" not in state:
             raise ParameterError(f"{checkpoint} holds EMA weights only (an inference checkpoint)")
-        try:
+        with damaged_checkpoint(checkpoint, "SGMD checkpoint"):
             self.model_config = ModelConfig(**state["model_config"])
             self.diffusion_config = DiffusionConfig(**state["diffusion_config"])
             self.prompt_kind = state["prompt_kind"]
@@ -76,10 +77,6 @@ class SGMDGenerator(Generator):
             self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"])
             self.trained_steps = int(state["step"])
             self.trained_genres = trained_genres_of(state)
-        except InputError:
-            raise
-        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as error:
-            raise InputError(f"{checkpoint}: damaged SGMD checkpoint ({type(error).__name__}: {' '.join(str(error).split())[:120]})") from None
 
     def music_tensor(self, features: np.ndarray) -> torch.Tensor:
         """(..., Tm, music_dim) standardised model input from (..., T, 35) features at 30 fps (per

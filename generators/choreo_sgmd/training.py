@@ -11,7 +11,9 @@ one process with the same global batch, up to the order of floating-point sums.
 from __future__ import annotations
 
 import copy
+import math
 import os
+import stat
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -21,7 +23,11 @@ import torch
 import torch.distributed as dist
 from torch.nn.parallel import DistributedDataParallel
 
+from choreo.errors import ParameterError
+from choreo.fileio import check_output_folder
 from choreo.generator import TrainProgress
+from choreo.generator.checkpoint import damaged_checkpoint
+from choreo.threads import choose_threads
 
 from .checkpoint import load_checkpoint, save_checkpoint
 from .config import DiffusionConfig, ModelConfig, TrainConfig
@@ -34,6 +40,10 @@ from .style import GENRES
 
 VALIDATION_WINDOWS = 64
 BEFORE_AUGMENTATION = {"mirror": False, "stretch": (1.0,), "turns": (0.0,), "genre_balance": 0.0}  # what older checkpoints trained with
+
+
+class SettingsDiffer(ParameterError, ValueError):
+    """A training state made under other settings than this run's: the user's choice, not damage."""
 
 
 def _step_generator(seed: int, step: int) -> torch.Generator:
@@ -148,16 +158,23 @@ class Trainer:
         changed = [f"{key} {stored[part][key]!r} -> {value!r}" for part in wanted for key, value in wanted[part].items()
                    if key not in free and stored[part].get(key) != value]
         if changed:
-            raise ValueError(f"cannot resume: the checkpoint was trained with other settings ({'; '.join(changed)})")
+            raise SettingsDiffer(f"cannot resume: the checkpoint was trained with other settings ({'; '.join(changed)})")
 
     def load_state(self, state: dict) -> None:
+        """Everything is checked against this run as it is loaded: torch takes optimiser moments and
+        statistics of any shape, and only the first training step would fail on them."""
         self.model.load_state_dict(state["state_dict"])
         self.ema.load_state_dict(state["ema_state_dict"])
         self.optimizer.load_state_dict(state["optimizer"])
-        self.normalizer = Normalizer.from_state_dict(state["normalizer"]).to(self.device)
-        self.music_scaler = MusicScaler.from_state_dict(state["music_scaler"]).to(self.device)
-        self.step, self.history = int(state["step"]), [list(row) for row in state["history"]]
+        check_optimizer_fits(self.optimizer)
+        self.normalizer = same_shapes(Normalizer.from_state_dict(state["normalizer"]), self.normalizer,
+                                      "normalizer").to(self.device)
+        self.music_scaler = same_shapes(MusicScaler.from_state_dict(state["music_scaler"]), self.music_scaler,
+                                        "music_scaler").to(self.device)
+        self.step, self.history = step_count(state["step"]), loss_history(state["history"])
         self.started_from = state.get("started_from")
+        if not isinstance(self.started_from, (dict, type(None))):
+            raise TypeError(f"started_from is a {type(self.started_from).__name__}, not a dict")
 
     def start_from(self, state: dict, name: str) -> None:
         """Fine-tune: another run's weights, optimiser and step, under this run's losses and data
@@ -166,9 +183,67 @@ class Trainer:
         changed = [f"{key} {value!r} -> {getattr(self.model_config, key)!r}" for key, value in stored.items()
                    if getattr(self.model_config, key) != value]
         if changed:
-            raise ValueError(f"cannot start from {name}: its network differs ({'; '.join(changed)})")
+            raise SettingsDiffer(f"cannot start from {name}: its network differs ({'; '.join(changed)})")
         self.load_state(state)
         self.started_from = {"checkpoint": name, "step": int(state["step"])}
+
+
+def check_optimizer_fits(optimizer: torch.optim.Optimizer) -> None:
+    """The optimiser's settings are finite numbers and its moments have their parameters' shapes."""
+    for group in optimizer.param_groups:
+        numbers = [group.get(key) for key in ("lr", "weight_decay", "eps")] + list(group.get("betas", ()))
+        if not all(isinstance(n, (int, float)) and not isinstance(n, bool) and math.isfinite(n) for n in numbers):
+            raise ValueError("optimizer settings that are not finite numbers")
+        for parameter in group["params"]:
+            for name, value in optimizer.state.get(parameter, {}).items():
+                if torch.is_tensor(value) and value.dim() and value.shape != parameter.shape:
+                    raise ValueError(f"optimizer {name} of shape {tuple(value.shape)} for a parameter of shape "
+                                     f"{tuple(parameter.shape)}")
+
+
+def same_shapes(loaded, current, name: str):
+    """``loaded`` (statistics from a checkpoint) if its tensors have the shapes of ``current``'s."""
+    for key, value in current.state_dict().items():
+        found = loaded.state_dict()[key]
+        if not torch.is_tensor(found) or found.shape != value.shape:
+            shape = tuple(getattr(found, "shape", ()))
+            raise ValueError(f"{name} {key} of shape {shape}, expected {tuple(value.shape)}")
+    return loaded
+
+
+def step_count(value) -> int:
+    """The step a state was saved at, a whole number of at least 0 (text or -1 failed only later)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"step {value!r} is not a count of steps")
+    return value
+
+
+def loss_history(rows) -> list[list[float]]:
+    """[step, train loss, validation loss] rows, as :meth:`Trainer.state` writes them."""
+    numbers = lambda row: all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in row)  # noqa: E731
+    if not isinstance(rows, list) or not all(isinstance(r, (list, tuple)) and len(r) == 3 and numbers(r) for r in rows):
+        raise ValueError("history is not a list of [step, loss, validation loss] rows")
+    return [list(row) for row in rows]
+
+
+def restore(trainer: Trainer, path: Path, resume: bool) -> None:
+    """Continue this run from ``path`` (``resume``), or fine-tune from another run's state. A state
+    whose content does not fit is one line naming the file; other settings are refused as such."""
+    state = load_checkpoint(path)
+    with damaged_checkpoint(path, "SGMD training state"):
+        if resume:
+            trainer.check_resumable(state)
+            trainer.load_state(state)
+        else:
+            trainer.start_from(state, path.name)
+
+
+def remove_partial_checkpoints(checkpoint: Path) -> None:
+    """Delete temporaries left beside ``checkpoint`` by a run killed while writing one (the
+    checkpoint itself is whole). Only files: a folder of that name is not choreo's to remove."""
+    for partial in checkpoint.parent.glob(f".{checkpoint.stem}.*.tmp{checkpoint.suffix}"):
+        if not stat.S_ISDIR(partial.lstat().st_mode):
+            partial.unlink(missing_ok=True)
 
 
 def process_group() -> tuple[torch.device, int, int]:
@@ -192,21 +267,18 @@ def train(model_config: ModelConfig, train_config: TrainConfig, train_data: Wind
     """Train until ``train_config.max_steps``; checkpoints go to ``out_dir/last.pt`` atomically.
     ``init_from``: a training state to fine-tune (ignored when resuming this run's own last.pt)."""
     if train_config.num_threads:
-        torch.set_num_threads(train_config.num_threads)
+        torch.set_num_threads(choose_threads(train_config.num_threads))  # at most the allowed CPUs
     device, rank, world = process_group()
-    out_dir = Path(out_dir)
+    out_dir = check_output_folder(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     checkpoint = out_dir / "last.pt"
     trainer = Trainer(model_config, diffusion_config, train_config, train_data, validation_data, device, rank, world)
     if rank == 0:
-        for partial in out_dir.glob(f".{checkpoint.stem}.*.tmp{checkpoint.suffix}"):
-            partial.unlink()  # left by a run killed while writing a checkpoint (last.pt itself is whole)
+        remove_partial_checkpoints(checkpoint)
     if resume and checkpoint.exists():
-        state = load_checkpoint(checkpoint)
-        trainer.check_resumable(state)
-        trainer.load_state(state)
+        restore(trainer, checkpoint, resume=True)
     elif init_from is not None:
-        trainer.start_from(load_checkpoint(init_from), Path(init_from).name)
+        restore(trainer, Path(init_from), resume=False)
     lead = rank == 0  # validates, writes checkpoints and reports progress
     started, seen, losses = time.perf_counter(), 0, []
     while trainer.step < train_config.max_steps:

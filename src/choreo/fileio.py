@@ -32,11 +32,26 @@ def check_output_dir(path: str | os.PathLike) -> Path:
     return path
 
 
+def check_output_folder(path: str | os.PathLike) -> Path:
+    """Fail early, with one line, if ``path`` cannot be (made) a folder of outputs: something else is
+    there, or the nearest folder that exists on the way to it is not writable. Creates nothing."""
+    path = Path(path)
+    for folder in (path, *path.absolute().parents):
+        if folder.exists() or folder.is_symlink():
+            if not folder.is_dir():
+                raise OutputError(f"cannot write to {path}: {folder} exists and is not a folder")
+            if not os.access(folder, os.W_OK):
+                raise OutputError(f"cannot write to {path}: folder {folder} is not writable")
+            break
+    return path
+
+
 @contextlib.contextmanager
-def atomic_output(path: str | os.PathLike, binary: bool = True) -> Iterator[IO]:
+def atomic_output(path: str | os.PathLike, binary: bool = True, follow_links: bool = True) -> Iterator[IO]:
     """Yield a file handle whose content replaces ``path`` only if the block succeeds.
 
     ``path == "-"`` writes to stdout instead (buffered, so a failure still writes nothing).
+    ``follow_links``: see :func:`output_target`.
     """
     if str(path) == STDOUT:
         import io
@@ -49,21 +64,26 @@ def atomic_output(path: str | os.PathLike, binary: bool = True) -> Iterator[IO]:
             stream.flush()
         return
 
-    with atomic_path(path) as temporary:
+    with atomic_path(path, follow_links) as temporary:
         with open(temporary, "wb" if binary else "w", encoding=None if binary else "utf-8") as handle:
             yield handle
             handle.flush()
             os.fsync(handle.fileno())
 
 
-def output_target(path: str | os.PathLike) -> Path:
+def output_target(path: str | os.PathLike, follow_links: bool = True) -> Path:
     """The regular file an output to ``path`` replaces: ``path`` itself, or the file a symlink at
     ``path`` leads to (written through, so the link stays) where the kernel's
     ``fs.protected_symlinks`` rule lets choreo follow it. Anything else that exists there (a
-    folder, a FIFO, a device such as /dev/null) is refused: replacing it would destroy it."""
+    folder, a FIFO, a device such as /dev/null) is refused: replacing it would destroy it.
+
+    ``follow_links=False`` is for files no user names (choreo's cache): a link there was planted,
+    so it is replaced itself and what it points to is never touched."""
     path = check_output_dir(path)
     try:
-        return _regular_file_at(path, _follow_links(path))
+        if not follow_links and path.is_symlink():
+            return path
+        return _regular_file_at(path, _follow_links(path) if follow_links else path)
     except OSError as error:  # a name too long for the file system, say
         raise OutputError(f"cannot write {path}: {error.strerror}") from None
 
@@ -112,9 +132,12 @@ def output_mode(target: Path) -> int:
     """The permissions an output gets, as ``cp`` and editors give them: those of the file it
     replaces (a private 0600 file stays private), else the default for a new file under the umask."""
     try:
-        return stat.S_IMODE(os.stat(target).st_mode) & 0o777
+        status = os.lstat(target)  # a link still at ``target`` is replaced, not its file: the default
     except FileNotFoundError:
+        status = None
+    if status is None or stat.S_ISLNK(status.st_mode):
         return 0o666 & ~current_umask()
+    return stat.S_IMODE(status.st_mode) & 0o777
 
 
 def current_umask() -> int:
@@ -131,11 +154,11 @@ def current_umask() -> int:
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike, follow_links: bool = True) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (same extension, for tools that infer the format from
     it, like ffmpeg); it replaces ``path`` only if the block succeeds. OS errors on the way (a name
-    too long, a full disk) are output errors (exit 3)."""
-    target = output_target(path)
+    too long, a full disk) are output errors (exit 3). ``follow_links``: see :func:`output_target`."""
+    target = output_target(path, follow_links)
     try:
         fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem[:100]}.", suffix=f".tmp{target.suffix[:20]}",
                                         dir=target.parent or ".")

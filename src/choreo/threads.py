@@ -6,7 +6,8 @@ generate` at once on two cores sampled 8 x slower than one alone. So before each
 count is chosen again from what is true now: the CPUs this process may run on (its affinity
 mask and its cgroup's CPU quota) less the tasks other processes have running at this moment
 (the kernel's instantaneous count in /proc/loadavg). ``--threads N`` and ``OMP_NUM_THREADS``
-win over the guess.
+win over the guess, up to the CPUs allowed: torch and libgomp start as many threads as they are
+told, and 99,999 of them end the process with a segmentation fault and no message.
 """
 
 from __future__ import annotations
@@ -75,14 +76,37 @@ def own_running_threads() -> int:
 
 
 def choose_threads(requested: int | None = None) -> int:
-    """``requested`` (--threads), else OMP_NUM_THREADS, else the idle share of the allowed CPUs."""
-    if requested:
-        return requested
-    given = os.environ.get("OMP_NUM_THREADS", "").strip()
-    if given.isdigit() and int(given) > 0:
-        return int(given)
+    """``requested`` (--threads), else OMP_NUM_THREADS, else the idle share of the allowed CPUs;
+    never more than the allowed CPUs (more only spin against each other)."""
     cpus = allowed_cpus()
+    if requested:
+        return min(requested, cpus)
+    given = os.environ.get("OMP_NUM_THREADS", "").strip()
+    if _is_count(given) and int(given) > 0:
+        return min(int(given), cpus)
     return max(1, min(cpus, cpus - busy_elsewhere()))
+
+
+def bound_omp_threads() -> None:
+    """Cap OMP_NUM_THREADS (a setting from the environment) at the allowed CPUs. Called before torch
+    loads: libgomp reads it once, when it loads, and starts that many threads at its first loop."""
+    given = os.environ.get("OMP_NUM_THREADS")
+    if given:
+        os.environ["OMP_NUM_THREADS"] = bounded_thread_setting(given, allowed_cpus())
+
+
+def bounded_thread_setting(value: str, cpus: int) -> str:
+    """``value`` (a count, or OpenMP's comma-separated counts per nesting level) with every count
+    capped at ``cpus``; anything else is left as it is, for OpenMP to ignore."""
+    counts = [part.strip() for part in value.split(",")]
+    if not all(_is_count(count) for count in counts):
+        return value
+    return ",".join(str(min(int(count), cpus)) for count in counts)
+
+
+def _is_count(text: str) -> bool:
+    """ASCII digits only: ``str.isdigit`` also takes superscripts and other scripts' digits."""
+    return text.isascii() and text.isdigit()
 
 
 def use_threads(requested: int | None = None) -> int:

@@ -10,6 +10,7 @@ import os
 import sys
 import warnings
 
+from ..threads import bound_omp_threads
 from .app import app
 from .interrupts import signals_raise
 from .text import plain
@@ -20,6 +21,7 @@ def main(argv: list[str] | None = None) -> int:
 
     SIGINT and SIGTERM unwind the command as exceptions (see :mod:`.interrupts`), so outputs and
     children are cleaned up; the exit code is then the shell's 128 + signal (130, 143)."""
+    bound_omp_threads()  # before torch loads
     with signals_raise() as received:
         try:
             code = _run(argv)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -88,12 +89,28 @@ def cached_music(audio_path: str | os.PathLike, start: float | None = None, end:
     if not use_cache:
         return Music.from_file(audio_path, start=start, end=end)
     entry = cache_dir() / "features" / f"{_cache_key(audio_path, start, end)}.npz"
-    music = _read_entry(entry, audio_path, start) if entry.exists() else None
+    music = _read_entry(entry, audio_path, start) if is_entry(entry) else None
     if music is not None:
         return music
     music = Music.from_file(audio_path, start=start, end=end)
-    entry.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_output(entry) as handle:
-        np.savez(handle, features=music.features, beat_times=music.beat_times, tempo=music.tempo,
-                 duration=music.duration, fps=music.fps)
+    write_entry(entry, features=music.features, beat_times=music.beat_times, tempo=music.tempo,
+                duration=music.duration, fps=music.fps)
     return music
+
+
+def is_entry(entry: Path) -> bool:
+    """Whether ``entry`` is there to be read: a regular file of its own. A link was planted (choreo
+    writes none) and may lead to a FIFO, whose reading never ends, or to another user's file."""
+    try:
+        return stat.S_ISREG(entry.lstat().st_mode)
+    except OSError:
+        return False
+
+
+def write_entry(entry: Path, **arrays) -> None:
+    """Store ``arrays`` as the NPZ cache entry ``entry``, atomically. No user names a cache entry,
+    so a link found at its name was planted there: the link itself is replaced, and the file it
+    points to is never written (an output named by the user is written through its link)."""
+    entry.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_output(entry, follow_links=False) as handle:
+        np.savez(handle, **arrays)

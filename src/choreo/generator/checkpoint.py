@@ -7,11 +7,14 @@ code and a file from the other backend (or an older format) is refused with one 
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
+from typing import Iterator
 
-from ..errors import InputError
+from ..errors import ChoreoError, InputError
 from ..fileio import atomic_output
+from .archive import check_checkpoint_archive
 
 
 def write_checkpoint(state: dict, path: str | os.PathLike, generator: str, format_version: int) -> None:
@@ -29,6 +32,7 @@ def read_checkpoint(path: str | os.PathLike, generator: str, label: str, format_
     path = Path(path)
     if not path.is_file():
         raise InputError(f"checkpoint {path} does not exist")
+    check_checkpoint_archive(path)  # sizes first: torch believes what the file says
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as error:  # torch raises many kinds for a damaged file
@@ -39,3 +43,21 @@ def read_checkpoint(path: str | os.PathLike, generator: str, label: str, format_
     if state.get("format_version") != format_version:
         raise InputError(f"{path} has checkpoint format {state.get('format_version')}, expected {format_version}")
     return state
+
+
+# What a state of the right format but wrong content raises where it is used: a missing key, a
+# string for a dict, unknown config keys, a tensor of another shape.
+STATE_ERRORS = (KeyError, TypeError, ValueError, RuntimeError, AttributeError, IndexError)
+
+
+@contextlib.contextmanager
+def damaged_checkpoint(where: str | os.PathLike, label: str) -> Iterator[None]:
+    """Inside the block, STATE_ERRORS are the file's fault: one line naming it (``label``: "SGMD
+    checkpoint"), exit 2, not a bug. Choreo's own errors (a setting that differs) pass unchanged."""
+    try:
+        yield
+    except ChoreoError:
+        raise
+    except STATE_ERRORS as error:
+        raise InputError(f"{where}: damaged {label} ({type(error).__name__}: "
+                         f"{' '.join(str(error).split())[:120]})") from None
