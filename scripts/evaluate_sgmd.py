@@ -18,7 +18,7 @@ import torch
 from choreo.datasets import TEST, TRAIN, load_dataset, select_split
 from choreo import load_backend
 from choreo.metrics.genre import GenreClassifier
-from choreo_sgmd import FREE_MUSIC_GUIDANCE
+from choreo_sgmd import MUSIC_GUIDANCE
 from choreo.metrics.stepping import pace_and_feet_by_genre
 from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score, score_generator, scoring_windows, table_row, windows_as_dances
 
@@ -29,8 +29,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("checkpoints", nargs="+")
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
-    parser.add_argument("--guidance", type=float, nargs="+", default=[FREE_MUSIC_GUIDANCE],
-                        help=f"guidance weights on the music (default {FREE_MUSIC_GUIDANCE:g}, the free dance's)")
+    parser.add_argument("--guidance", type=float, nargs="+", default=[MUSIC_GUIDANCE],
+                        help=f"guidance weights on the music (default {MUSIC_GUIDANCE:g}, the CLI's)")
     parser.add_argument("--steps", type=int, nargs="+", default=[50])
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--intervals", nargs="+", default=["auto"],

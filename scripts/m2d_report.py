@@ -27,7 +27,7 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 from choreo.datasets.cache import cache_dir, cached_music
 from choreo.datasets.m2d import (
     GENRES, MARKER_NAMES, SMPL_TARGETS, SOURCE_FPS, UPSTREAM_FPS, OffsetSearch,
-    clip_folders, estimate_music_offset, genre_of, load_fit, load_m2d, make_split, read_recording,
+    clip_folders, estimate_music_offset, genre_of, load_fit, load_m2d, make_split, make_validation, read_recording,
 )  # fmt: skip
 from choreo.skeleton import JOINT_NAMES
 
@@ -187,8 +187,10 @@ def write_split(names: list[str]) -> dict[str, str]:
     description = ("Fixed M2D train/test split by clip (never by window): per genre in the order C, R, T, W "
                    "with clips in numeric order, numpy default_rng(2018) draws round(20 %) of the clips (at "
                    "least one) for test; tango has a single clip, which stays in train. See "
-                   "choreo.datasets.m2d.make_split and docs/m2d.md.")
-    payload = {"description": description, "splits": split}
+                   "choreo.datasets.m2d.make_split and docs/m2d.md. 'validation' is drawn the same way from "
+                   "train with default_rng(2019): train clips a model can be trained without "
+                   "(choreo train sgmd --hold-out-validation) to choose settings on (make_validation).")
+    payload = {"description": description, "splits": split, "validation": make_validation(split["train"])}
     (PACKAGE / "m2d_split.json").write_text(json.dumps(payload, indent=1) + "\n")
     return {n: s for s, members in split.items() for n in members}
 

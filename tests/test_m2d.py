@@ -14,7 +14,7 @@ import pytest
 from choreo.datasets import TEST, TRAIN, WindowConfig, WindowedDataset, load_dataset
 from choreo.datasets.m2d import (
     GENRES, MARKER_NAMES, SMPL_TARGETS, SOURCE_FPS, clip_folders, clip_splits, load_clip, load_m2d,
-    make_split, music_offsets, read_recording,
+    make_split, make_validation, music_offsets, read_recording, validation_clips,
 )  # fmt: skip
 from choreo.errors import DatasetError
 from choreo.music import FEATURE_DIM
@@ -86,6 +86,17 @@ def test_fixed_split_by_clip(clips):
     test_seconds = sum(c.motion.duration for c in clips if c.split == TEST)
     assert 0.15 < test_seconds / sum(c.motion.duration for c in clips) < 0.3
     assert [c.name for c in load_m2d(M2D, split=TEST)] == [c.name for c in clips if c.split == TEST]
+
+
+def test_validation_clips_are_drawn_from_train_per_genre():
+    """The validation clips (m2d_split.json) are what make_validation draws: train clips only,
+    at least one per genre that has several, none from tango's single clip."""
+    splits = clip_splits()
+    train = sorted(n for n, s in splits.items() if s == TRAIN)
+    held = validation_clips()
+    assert list(held) == make_validation(train) and set(held) <= set(train)
+    assert {n.split("_")[1] for n in held} == {"C", "R", "W"}
+    assert make_validation(train) != make_validation(train, seed=2018)  # the seed matters
 
 
 @needs_data

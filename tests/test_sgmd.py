@@ -204,7 +204,7 @@ def test_default_guidance_guides_the_style_and_the_music_on_the_low_noise_steps_
     model = Denoiser(TINY).eval()
     x, _, music, style = inputs(batch=2)
     options, schedule = SamplingOptions().resolved(constrained=False), NoiseSchedule()
-    assert (options.guidance, options.style_guidance, options.guidance_interval) == (2.5, 2.0, None)
+    assert (options.guidance, options.style_guidance, options.guidance_interval) == (2.0, 2.0, None)
     edit = SamplingOptions().resolved(constrained=True)
     assert (edit.guidance, edit.style_guidance) == (2.0, 1.0)  # edits keep to the given frames
     asked = SamplingOptions(guidance=1.5, style_guidance=3.0).resolved(constrained=True)
@@ -431,7 +431,7 @@ def test_generate_writes_several_formats_deterministically(tiny_checkpoint, tmp_
     args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3", "--seed", "5"]
     code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "a.bvh", "-o", tmp_path / "a.npz")
     assert code == 0, err
-    assert "wrote" in err and "waltz" in err and "3 steps, guidance 2.5, style guidance 2," in err
+    assert "wrote" in err and "waltz" in err and "3 steps, guidance 2, style guidance 2," in err
     bvh, npz = read_motion(tmp_path / "a.bvh"), read_motion(tmp_path / "a.npz")
     assert npz.metadata["style_guidance"] == 2.0
     assert bvh.num_frames == npz.num_frames == Music.from_file(EXAMPLE_SONG).num_frames
@@ -449,7 +449,7 @@ def test_style_guidance_flag_changes_the_dance_and_its_summary(tiny_checkpoint, 
     args = [EXAMPLE_SONG, "--style", "waltz", "--checkpoint", tiny_checkpoint, "--steps", "3"]
     code, _, err = run_cli(capsys, "generate", *args, "--style-guidance", "1", "-o", tmp_path / "plain.npz")
     assert code == 0, err
-    assert "guidance 2.5, seed 0" in err and "style guidance" not in err
+    assert "guidance 2, seed 0" in err and "style guidance" not in err
     code, _, err = run_cli(capsys, "generate", *args, "-o", tmp_path / "guided.npz")
     assert code == 0, err
     plain, guided = read_motion(tmp_path / "plain.npz"), read_motion(tmp_path / "guided.npz")
@@ -580,3 +580,84 @@ def test_ddpm_step_draws_from_the_closed_form_posterior(t):
     noise = torch.randn(sample.shape, generator=torch.Generator().manual_seed(5), dtype=torch.float64)
     torch.testing.assert_close(out.prev_sample, mean + std * noise, rtol=1e-9, atol=1e-9)
     torch.testing.assert_close(out.pred_original_sample, clipped)
+
+
+# Issue 48, item 5: training states that load but do not fit are one line naming the file ---------
+
+def _first(weights):
+    return next(iter(weights))
+
+
+def _moment_of_another_shape(state):
+    moments = next(iter(state["optimizer"]["state"].values()))
+    moments["exp_avg"] = torch.zeros(3, 3, 3)
+
+
+DAMAGED_STATES = {
+    "no model_config": lambda s: s.pop("model_config"),
+    "no step": lambda s: s.pop("step"),
+    "a config that is a string": lambda s: s.update(model_config="tiny"),
+    "a config with an unknown key": lambda s: s["model_config"].update(wings=2),
+    "a weight of the wrong shape": lambda s: s["state_dict"].update({_first(s["state_dict"]): torch.zeros(3)}),
+    "an optimizer state that is a list": lambda s: s.update(optimizer=[1, 2]),
+    "optimizer moments of the wrong shape": _moment_of_another_shape,
+    "a normaliser of the wrong width": lambda s: s.update(normalizer={"low": torch.zeros(5), "high": torch.ones(5)}),
+    "a step that is text": lambda s: s.update(step="many"),
+    "a history of text": lambda s: s.update(history=["abc"]),
+}
+
+
+@pytest.fixture(scope="module")
+def training_state(tmp_path_factory):
+    """A real training state: one step of the tiny network with AdamW moments."""
+    from choreo_sgmd.training import train
+
+    config = TrainConfig(batch_size=4, max_steps=1, validation_every=1, checkpoint_every=1)
+    return load_checkpoint(train(TINY, config, synthetic_windows(), None, tmp_path_factory.mktemp("state")))
+
+
+@pytest.mark.parametrize("resume", [True, False], ids=["resume", "init-from"])
+@pytest.mark.parametrize("damage", list(DAMAGED_STATES))
+def test_a_damaged_training_state_is_one_line_naming_the_file(tmp_path, training_state, damage, resume):
+    import copy
+
+    from choreo_sgmd.training import train
+
+    state = copy.deepcopy(training_state)
+    DAMAGED_STATES[damage](state)
+    out = tmp_path / "run"
+    out.mkdir()
+    damaged = out / "last.pt" if resume else tmp_path / "base.pt"
+    save_checkpoint(state, damaged)
+    config = TrainConfig(batch_size=4, max_steps=3, validation_every=1, checkpoint_every=1)
+    with pytest.raises(InputError, match="damaged SGMD training state") as refused:
+        train(TINY, config, synthetic_windows(), None, out, resume=resume, init_from=None if resume else damaged)
+    assert str(damaged) in str(refused.value) and "\n" not in str(refused.value)
+    assert sorted(p.name for p in out.iterdir()) == (["last.pt"] if resume else [])  # nothing written
+
+
+def test_a_leftover_temporary_that_is_a_folder_is_left_alone(tmp_path):
+    from choreo_sgmd.training import train
+
+    stray = tmp_path / "run" / ".last.x1y2.tmp.pt"
+    stray.mkdir(parents=True)
+    (tmp_path / "run" / ".last.z3.tmp.pt").write_bytes(b"partial")  # a real leftover: removed
+    config = TrainConfig(batch_size=4, max_steps=1, validation_every=1, checkpoint_every=1)
+    train(TINY, config, synthetic_windows(), None, tmp_path / "run")
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == [".last.x1y2.tmp.pt", "last.pt"]
+
+
+def test_train_resume_from_a_damaged_state_is_exit_2_with_one_line(tmp_path, capsys):
+    from choreo.cli import main
+
+    fixtures = Path(__file__).parent / "fixtures" / "aistpp"
+    train = ["train", "sgmd", "--data", str(fixtures), "--out", str(tmp_path / "run"), "--config", "tiny",
+             "--steps", "1", "--batch-size", "2", "--checkpoint-every", "1", "--prompt", "onehot"]
+    assert main(train) == 0
+    state = load_checkpoint(tmp_path / "run" / "last.pt")
+    state["model_config"] = "tiny"
+    save_checkpoint(state, tmp_path / "run" / "last.pt")
+    capsys.readouterr()
+    code = main([*train, "--resume"])
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert code == 2 and len(err) == 1 and "damaged SGMD training state (TypeError" in err[0], err

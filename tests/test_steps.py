@@ -5,7 +5,8 @@ import pytest
 
 from choreo.errors import ParameterError
 from choreo.finishing import finish
-from choreo.finishing.steps import HORIZONTAL, LEGS, StepConfig, fixed_weights, plan_steps, steps
+from choreo.finishing.steps import HORIZONTAL, LEGS, StepConfig, plan_steps, steps
+from choreo.motion.filters import fixed_weights
 from choreo.metrics.stepping import stepping
 from choreo.motion import Motion
 
@@ -132,8 +133,8 @@ def test_other_skeletons_and_short_dances_pass_through():
 
 def test_finish_runs_the_planner_when_asked():
     motion = glider()
-    plain = finish(motion, np.array([]), beat=False, speed=False, footsteps=False)
-    stepped = finish(motion, np.array([]), beat=False, speed=False)  # on by default
+    plain = finish(motion, np.array([]), beat=False, speed=False, footsteps=False, root_path=None, pace=None)
+    stepped = finish(motion, np.array([]), beat=False, speed=False, root_path=None)  # on by default
     assert plain is motion
     before, after = (stepping(m.joint_positions(), FPS) for m in (motion, stepped))
     assert after.planted_share > 0.2 > before.planted_share and after.support_slide < 0.5 * before.support_slide

@@ -104,4 +104,22 @@ def test_training_defaults_are_the_bundled_models_recipe():
     assert set(bundled["diffusion_config"]) <= set(to_dict(DiffusionConfig()))
     free = {"max_steps", "validation_every", "checkpoint_every"}
     defaults = {k: v for k, v in to_dict(TrainConfig()).items() if k not in free}
-    assert defaults == {k: v for k, v in bundled["train_config"].items() if k not in free}
+    assert defaults == {k: v for k, v in to_dict(TrainConfig(**bundled["train_config"])).items() if k not in free}
+    assert set(bundled["train_config"]) <= set(to_dict(TrainConfig()))
+
+
+def test_holding_out_validation_needs_m2d_and_leaves_its_clips_out():
+    """--hold-out-validation: a dataset without M2D's validation clips is a one-line error; on M2D
+    clips, the validation clips leave training and become its validation set."""
+    from types import SimpleNamespace
+
+    from choreo.datasets.m2d import validation_clips
+    from choreo_sgmd import _without_validation
+
+    refused = subprocess.run([*CHOREO, "train", "sgmd", "--data", str(FIXTURES), "--out", "runs-never", "--config", "tiny",
+                              "--steps", "1", "--hold-out-validation"], capture_output=True, text=True, timeout=300)
+    assert refused.returncode == 2 and "validation clips" in refused.stderr and "Traceback" not in refused.stderr
+    clips = [SimpleNamespace(name=n) for n in ("DANCE_C_6", *validation_clips(), "DANCE_W_1")]
+    train, held = _without_validation(clips)
+    assert [c.name for c in train] == ["DANCE_C_6", "DANCE_W_1"]
+    assert [c.name for c in held] == list(validation_clips())

@@ -11,11 +11,11 @@ from pathlib import Path
 from choreo.generator import GeneratorPlugin
 from choreo.generator.registry import lazy_exports
 
-from .options import FREE_MUSIC_GUIDANCE, SamplingOptions, TrainOptions
+from .options import MUSIC_GUIDANCE, SamplingOptions, TrainOptions
 
 __all__ = [
     "DEFAULT_CHECKPOINT", "plugin", "build_generator", "train_from_dataset", "SamplingOptions", "TrainOptions",
-    "FREE_MUSIC_GUIDANCE",
+    "MUSIC_GUIDANCE",
     # below: what scripts and benchmarks reach past `choreo.load_backend("sgmd")` for (issue 39)
     "train", "Trainer", "TrainConfig", "DiffusionConfig", "model_config", "WindowTensors", "windows_to_tensors",
     "export_for_inference", "genre_styles",
@@ -69,6 +69,9 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]
+    if options.hold_out_validation:
+        train_clips, test_clips = _without_validation(train_clips)
+        train_config = replace(train_config, held_out=tuple(sorted(c.name for c in test_clips)))
     windows = WindowConfig(seconds=model.window_frames * model.frame_stride / 30,
                            stride_seconds=train_config.window_stride_seconds)
     augmentation = Augmentation(mirror=train_config.mirror, stretch=train_config.stretch, turns=train_config.turns)
@@ -78,6 +81,17 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
                                      frame_stride=model.frame_stride) if test_clips else None)
     return train(model, train_config, train_data, validation, out_dir, resume=resume, diffusion_config=diffusion,
                  progress=progress, init_from=options.init_from)
+
+
+def _without_validation(train_clips):
+    """(training clips, validation clips): the M2D validation clips taken out of training and
+    validated on, so the test split plays no part in the run."""
+    from choreo.datasets.m2d import validation_clips
+
+    held = set(validation_clips())
+    if not held & {c.name for c in train_clips}:
+        raise ValueError("--hold-out-validation needs the M2D dataset (its validation clips were not found)")
+    return [c for c in train_clips if c.name not in held], [c for c in train_clips if c.name in held]
 
 
 def build_generator(checkpoint: str | Path, **options):

@@ -103,12 +103,14 @@ class TrainConfig:
     stretch: tuple[float, ...] = (1.0,)  # also danced at these paces, music along (e.g. 0.85, 1, 1.18; docs/sgmd.md)
     turns: tuple[float, ...] = (0.0,)  # and facing these ways (degrees about the vertical; unmeasured, off)
     genre_balance: float = 0.0  # draw windows with weight (windows of their genre)^-genre_balance (0: uniform)
+    held_out: tuple[str, ...] = ()  # train clips left out to validate on (M2D's validation clips; a resume keeps them out)
 
     def __post_init__(self):
         if self.prompt_kind not in PROMPT_KINDS:
             raise ValueError(f"prompt_kind must be one of {PROMPT_KINDS}, got {self.prompt_kind!r}")
         object.__setattr__(self, "stretch", tuple(float(f) for f in self.stretch))  # lists come back from checkpoints
         object.__setattr__(self, "turns", tuple(float(t) for t in self.turns))
+        object.__setattr__(self, "held_out", tuple(str(n) for n in self.held_out))
         if not 0.0 <= self.genre_balance <= 1.0:
             raise ValueError(f"genre_balance must be in [0, 1], got {self.genre_balance}")
 

@@ -11,18 +11,15 @@ STYLED_MUSIC_INTERVAL = (0.0, 0.6)
 # The style term lifts the genre recognised in free dances from 72 to 80 %, but under seed motion or
 # in-betweening it worsens FID_g and PFC in every seed measured: it pulls away from the given frames.
 FREE_STYLE_GUIDANCE, CONSTRAINED_STYLE_GUIDANCE = 2.0, 1.0
-# Music guidance 2.5 on a free dance: FID_k 42.8 -> 35.3 over three seeds, cha-cha's pace 0.32 -> 0.38 m/s
-# (real 0.50), PFC still under real's once footsteps plant the feet; 3 overshoots rumba's and waltz's pace by
-# 40 %. Under constraints the 2 that was measured there (docs/results.md, "Sampler and guidance").
-FREE_MUSIC_GUIDANCE, CONSTRAINED_MUSIC_GUIDANCE = 2.5, 2.0
+# Music guidance, chosen on whole songs: 2.5 (chosen on 5 s windows) rushes whole dances to 1.5 x the real
+# dancers' pace; 1.5 keeps it but loses kinetic realism (docs/results.md, "Whole songs").
+MUSIC_GUIDANCE = 2.0
 
 
 @dataclass(frozen=True)
 class SamplingOptions:
     steps: int = 10  # DDIM steps; docs/results.md has the quality-against-steps curve behind 10 (DDPM: 1000)
-    # Classifier-free guidance weight w on music (paper eq. 6); None: FREE_MUSIC_GUIDANCE for a free dance,
-    # CONSTRAINED_MUSIC_GUIDANCE under constraints (`resolved`).
-    guidance: float | None = None
+    guidance: float = MUSIC_GUIDANCE  # classifier-free guidance weight w on music (paper eq. 6)
     sampler: str = "ddim"
     eta: float = 1.0  # DDIM stochasticity: 1 as EDGE samples, 0 deterministic
     seed: int = 0
@@ -38,7 +35,7 @@ class SamplingOptions:
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
 
     def __post_init__(self):
-        if any(w is not None and w < 0 for w in (self.guidance, self.style_guidance)) or self.steps < 1:
+        if self.guidance < 0 or (self.style_guidance is not None and self.style_guidance < 0) or self.steps < 1:
             raise ValueError("guidance and style_guidance must be >= 0 and steps >= 1")
         if self.sampler not in SAMPLERS:
             raise ValueError(f"unknown sampler {self.sampler!r} (use ddim or ddpm)")
@@ -50,11 +47,9 @@ class SamplingOptions:
             raise ValueError("chunk_windows, block_windows and resample must be >= 1")
 
     def resolved(self, constrained: bool) -> "SamplingOptions":
-        """These options with the music and style guidance decided for a free or a constrained dance."""
-        music = CONSTRAINED_MUSIC_GUIDANCE if constrained else FREE_MUSIC_GUIDANCE
+        """These options with the style guidance decided for a free or a constrained dance."""
         style = CONSTRAINED_STYLE_GUIDANCE if constrained else FREE_STYLE_GUIDANCE
-        return replace(self, guidance=music if self.guidance is None else self.guidance,
-                       style_guidance=style if self.style_guidance is None else self.style_guidance)
+        return replace(self, style_guidance=style if self.style_guidance is None else self.style_guidance)
 
     def guided_steps(self, timesteps: int, style_guided: bool = False) -> tuple[int, int]:
         """The diffusion steps t (inclusive) where music guidance applies, for T = ``timesteps``;
@@ -111,3 +106,4 @@ class TrainOptions:
     leg_weight: float | None = None  # the legs' rotation channels' weight in the x0 term (1: as every channel)
     root_speed_weight: float | None = None  # the root's horizontal speed against the data's (0: off)
     init_from: str | None = None  # a training state to fine-tune from (same network)
+    hold_out_validation: bool = False  # M2D: train without the validation clips, validate on them

@@ -35,6 +35,8 @@ class Finishing:
     foot_lock: bool = False  # planted feet's drift moved onto the root (halves PFC, doubles FID_g)
     speed_limit: bool = True  # turns and dashes faster than real dancers' spread over neighbouring frames
     footsteps: bool = True  # feet stand until the body leaves them, then step (legs by IK; docs/results.md, "Feet")
+    root_path: bool = True  # the root's travel low-passed, its wobble removed (choreo.finishing.root_path)
+    pace: bool = True  # a free dance's travel brought toward its genre's real pace (choreo.finishing.pace)
 
 
 _BACKENDS: dict[tuple, "Generator"] = {}
@@ -139,7 +141,7 @@ def dance(
     ``threads``: torch threads for the dance (default: the CPUs other work leaves idle, choreo.threads).
     """
     from .errors import ParameterError
-    from .finishing import finish
+    from .finishing import PaceConfig, RootPathConfig, finish
     from .finishing.steps import TURNED_JOINTS
     from .generator import GenerationRequest
     from .threads import use_threads
@@ -165,6 +167,8 @@ def dance(
     # hour's raw dance kept here beside the finished one would add to the peak memory.
     finished = finish(backend.generate(request, progress=progress), music.beat_frames, frames,
                       beat=finishing.beat_lock, foot=finishing.foot_lock, speed=finishing.speed_limit,
-                      footsteps=finishing.footsteps, legs_fixed=legs)
+                      footsteps=finishing.footsteps, legs_fixed=legs,
+                      root_path=RootPathConfig() if finishing.root_path else None,
+                      pace=PaceConfig() if finishing.pace else None)
     finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
     return finished

@@ -26,7 +26,7 @@ STYLE = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text
 CHECKPOINT = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one.")
 GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
 STEPS = typer.Option(None, help="Sampling steps (default: the backend's: 10 DDIM steps for sgmd, 1000 for ddpm).")
-GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the music (default 2.5; 2 with keys, seed motion or kept parts; 1 = none).")
+GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the music (1 = none; the default is in docs/sgmd.md).")
 STYLE_GUIDANCE = typer.Option(None, "--style-guidance",
                               help="sgmd: guidance weight on the --style prompt (default 2, or 1 where frames are "
                                    "given; 1 = none, a third faster).")

@@ -38,6 +38,7 @@ def train(
     leg_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the legs' rotation channels inside the x0 term (default 1: as every channel)."),
     root_speed_weight: Optional[float] = typer.Option(None, help="sgmd: weight of the root's horizontal speed against the data's, direction-free, in (m/s)^2 (default 0: off)."),
     init_from: Optional[Path] = typer.Option(None, help="sgmd: fine-tune from this training state (same network; its step count carries on)."),
+    hold_out_validation: bool = typer.Option(False, "--hold-out-validation", help="sgmd on M2D: train without the validation clips (docs/m2d.md) and validate on them."),
     resume: bool = typer.Option(False, "--resume", help="Continue from OUT/last.pt (same data order and noise as if never stopped)."),
 ) -> None:
     """Train a backend; rich progress shows loss, validation loss and throughput.
@@ -51,6 +52,7 @@ def train(
       choreo train graph --data ../shared/data/m2d --out runs/graph --steps 1200
     """
     from ..errors import ChoreoError, ParameterError
+    from ..fileio import check_output_folder
     from ..generator import available_plugins
     from ..generator.options import parse_options
 
@@ -64,6 +66,7 @@ def train(
         raise ParameterError(f"--data {data} is not a folder")
     if init_from is not None and not init_from.is_file():
         raise ParameterError(f"--init-from {init_from} is not a file")
+    check_output_folder(out)  # before the data loads, which takes minutes
 
     given = {"config": config, "steps": steps, "batch_size": batch_size, "prompt": prompt, "style_mode": style_mode,
              "style_init": style_init, "style_dropout": style_dropout, "checkpoint_every": checkpoint_every, "seed": seed,
@@ -71,6 +74,7 @@ def train(
              "sigma_data": sigma_data, "snr_gamma": snr_gamma, "reconstruction_weight": reconstruction_weight,
              "foot_weight": foot_weight, "contact_source": contact_source, "stepping_weight": stepping_weight,
              "leg_weight": leg_weight, "root_speed_weight": root_speed_weight,
+             "hold_out_validation": hold_out_validation or None,
              "init_from": None if init_from is None else str(init_from),
              "stretch": None if stretch is None else _numbers("--stretch", stretch, "0.85,1,1.18"),
              "turns": None if turns is None else _numbers("--turns", turns, "0,90,180,270")}

@@ -33,13 +33,12 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d, percentile_filter
 
 from ..errors import DatasetError, ParameterError
-from ..fileio import atomic_output
 from ..formats import json_arrays
 from ..motion import Motion
 from ..motion.motion import MAX_COORDINATE
 from ..skeleton import JOINT_NAMES, SMPL24, forward_kinematics, quaternion_to_matrix
 from .base import TEST, TRAIN, Clip, ProgressCallback
-from .cache import cache_dir, cached_music
+from .cache import cache_dir, cached_music, is_entry, write_entry
 from .clips import align_music_and_motion, leg_length
 from .ik import IKConfig, fit_rotations, one_torch_thread, performer_skeleton
 
@@ -213,7 +212,7 @@ def fit_recording(recording: M2DRecording, config: IKConfig = IK_CONFIG) -> dict
 def load_fit(folder: str | Path, recording: M2DRecording, use_cache: bool = True) -> dict[str, np.ndarray]:
     """:func:`fit_recording`, from ``cache_dir()/m2d`` when the same file was fitted before."""
     entry = _fit_cache_path(Path(folder), recording.fps)
-    if use_cache and entry.exists():
+    if use_cache and is_entry(entry):
         try:
             with np.load(entry) as cached:
                 fit = {key: cached[key] for key in cached.files}
@@ -223,9 +222,7 @@ def load_fit(folder: str | Path, recording: M2DRecording, use_cache: bool = True
             pass  # a damaged entry is refitted below
     fit = fit_recording(recording)
     if use_cache:
-        entry.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_output(entry) as handle:
-            np.savez(handle, **fit)
+        write_entry(entry, **fit)
     return fit
 
 
@@ -394,6 +391,11 @@ def clip_splits() -> dict[str, str]:
     return {name: split for split, names in table.items() for name in names}
 
 
+def validation_clips() -> tuple[str, ...]:
+    """The train clips held back for validation (m2d_split.json, `make_validation`)."""
+    return tuple(_package_json("m2d_split.json")["validation"])
+
+
 def make_split(names: list[str], test_share: float = 0.2, seed: int = 2018) -> dict[str, list[str]]:
     """The fixed by-clip train/test split (what m2d_split.json holds).
 
@@ -402,14 +404,26 @@ def make_split(names: list[str], test_share: float = 0.2, seed: int = 2018) -> d
     genre with a single clip (tango) stays in train and is absent from test. On the 41 clips this
     puts 22 % of the motion's duration in test.
     """
+    test = _draw_per_genre(names, test_share, seed)
+    return {TRAIN: sorted(n for n in names if n not in test), TEST: sorted(test)}
+
+
+def make_validation(train_names: list[str], share: float = 0.2, seed: int = 2019) -> list[str]:
+    """Train clips held back for choosing settings (m2d_split.json's "validation"), drawn as the
+    test split is but from the train split with another seed: a model trained without them can be
+    tuned on songs it never heard, and the test split stays for reporting."""
+    return sorted(_draw_per_genre(train_names, share, seed))
+
+
+def _draw_per_genre(names: list[str], share: float, seed: int) -> list[str]:
     rng = np.random.default_rng(seed)
-    test: list[str] = []
+    drawn: list[str] = []
     for code in GENRES:
         clips = sorted((n for n in names if genre_of(n) == GENRES[code]), key=clip_number)
         if len(clips) >= 2:
-            count = max(1, int(round(test_share * len(clips))))
-            test += [str(n) for n in rng.choice(clips, count, replace=False)]
-    return {TRAIN: sorted(n for n in names if n not in test), TEST: sorted(test)}
+            count = max(1, int(round(share * len(clips))))
+            drawn += [str(n) for n in rng.choice(clips, count, replace=False)]
+    return drawn
 
 
 # -- loading ------------------------------------------------------------------------------------

@@ -7,13 +7,16 @@ import numpy as np
 from ..motion import Motion
 from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
 from .foot_lock import FootLockConfig, foot_lock
+from .pace import PaceConfig, paced
+from .root_path import RootPathConfig, smooth_root_path
 from .speed_limit import SpeedLimitConfig, speed_limit
 from .steps import StepConfig, steps as planted_steps
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | None = None, *,
            beat: bool = True, foot: bool = False, speed: bool = True, footsteps: bool = True,
-           legs_fixed: np.ndarray | None = None, step_config: StepConfig = StepConfig()) -> Motion:
+           legs_fixed: np.ndarray | None = None, step_config: StepConfig = StepConfig(),
+           root_path: RootPathConfig | None = RootPathConfig(), pace: PaceConfig | None = PaceConfig()) -> Motion:
     """The passes as `choreo generate` applies them by default: speed limit, footsteps, beat lock (and,
     when asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
     The speed limit goes first, so that a glitch is not taken for a motion beat, and last, since
@@ -25,6 +28,10 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | No
     settings (scripts/experiments/footsteps_settings.py compares them)."""
     if speed:
         motion = speed_limit(motion, fixed)
+    if root_path is not None:
+        motion = smooth_root_path(motion, fixed, root_path)
+    if pace is not None:
+        motion = paced(motion, fixed, pace)
     if footsteps:
         motion = planted_steps(motion, fixed if legs_fixed is None else legs_fixed, step_config)
     if beat:
@@ -36,5 +43,5 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | No
     return motion
 
 
-__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "SpeedLimitConfig", "StepConfig", "beat_lock", "finish",
-           "foot_lock", "lock_warp", "planted_steps", "speed_limit"]
+__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "PaceConfig", "RootPathConfig", "SpeedLimitConfig", "StepConfig", "beat_lock", "finish",
+           "foot_lock", "lock_warp", "paced", "planted_steps", "smooth_root_path", "speed_limit"]

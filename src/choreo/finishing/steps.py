@@ -18,10 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage
 
 from ..errors import ParameterError
 from ..motion import Motion
+from ..motion.filters import fixed_weights
 from ..motion.motion import frame_chunks
 from ..skeleton import SMPL24
 from ..skeleton import rotations as rot
@@ -75,14 +75,6 @@ def plan_steps(wanted: np.ndarray, fps: float, config: StepConfig = StepConfig()
             if t >= land:
                 anchors[foot], stepping = end, None
     return planned
-
-
-def fixed_weights(fixed: np.ndarray, fps: float, blend_seconds: float) -> np.ndarray:
-    """(T,) 1 away from fixed frames, 0 on them, a linear ramp over ``blend_seconds`` between."""
-    if not fixed.any():
-        return np.ones(len(fixed))
-    distance = scipy.ndimage.distance_transform_edt(~fixed)  # frames to the nearest fixed one, in O(T)
-    return np.clip(distance / max(blend_seconds * fps, 1.0), 0.0, 1.0)
 
 
 def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
