@@ -259,3 +259,43 @@ def test_train_refuses_an_out_that_is_a_file_before_loading_any_data(capsys, tmp
     code, _, err = run_cli(capsys, "train", "sgmd", "--data", tmp_path / "data", "--out", tmp_path / where)
     assert_one_line_error(code, err, exit_code=3)
     assert "exists and is not a folder" in err and (tmp_path / "out").read_bytes() == b"a file"
+
+
+# Issue 48, items 10 and 12: numbers that overflowed (exit 70) or slipped past a bound ---------------
+
+@pytest.mark.parametrize("fps, words", [("inf", "--fps takes a finite number"), ("nan", "--fps takes a finite number"),
+                                        ("1e6", "--fps must be 1 to 1000"), ("0_5", "--fps takes a finite number")])
+def test_convert_fps_is_bounded_before_resampling(tmp_path, capsys, fps, words):
+    write_dance(tmp_path / "dance.npz")
+    code, _, err = run_cli(capsys, "convert", tmp_path / "dance.npz", tmp_path / "out.bvh", "--fps", fps)
+    assert_one_line_error(code, err)
+    assert words in err and not (tmp_path / "out.bvh").exists()
+
+
+@pytest.mark.parametrize("seed, words", [("1" + "0" * 30, "--seed must be"), ("1e30", "--seed takes a whole number"),
+                                         ("9" * 5000, "--seed takes a whole number"), ("\uff17", "--seed takes a whole number")])
+@pytest.mark.parametrize("command", ["generate", "graph"])
+def test_seeds_past_the_backends_range_are_refused_by_name(tmp_path, capsys, command, seed, words):
+    code, _, err = run_cli(capsys, command, EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", "--seed", seed)
+    assert_one_line_error(code, err)
+    assert words in err and len(err) < 120 and not (tmp_path / "dance.bvh").exists()
+
+
+@pytest.mark.parametrize("flags, words", [(("--guidance", "nan"), "--guidance takes a finite number"),
+                                          (("--guidance", "inf"), "--guidance takes a finite number"),
+                                          (("--guidance", "1e308"), "guidance must be 0 to 20"),
+                                          (("--style-guidance", "nan"), "--style-guidance takes a finite number")])
+def test_guidance_is_checked_before_the_dance(tmp_path, capsys, monkeypatch, flags, words):
+    import choreo.music
+
+    monkeypatch.setattr(choreo.music.Music, "from_file", lambda *a, **k: pytest.fail("analysed before the check"))
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", *flags)
+    assert_one_line_error(code, err)
+    assert words in err and not (tmp_path / "dance.bvh").exists()
+
+
+def test_a_checkpoint_that_is_a_folder_says_so(tmp_path, capsys):
+    (tmp_path / "weights").mkdir()
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", "--checkpoint", tmp_path / "weights")
+    assert_one_line_error(code, err)
+    assert "is a folder, expected a file" in err and "does not exist" not in err

@@ -375,10 +375,18 @@ def test_time_keys(text, expected):
     assert (seconds, source) == expected and type(seconds) is float
 
 
-@pytest.mark.parametrize("text", ["4.0=", "4.0", "-1=a", "-0.5=a", "inf=a", "nan=a", "abc=a", "=a", ""])
+@pytest.mark.parametrize("text", ["4.0=", "4.0", "-1=a", "-0.5=a", "inf=a", "nan=a", "abc=a", "=a", "",
+                                  "1e999=a", "1_0=a", "\uff14=a", "9" * 5000 + "=a"])
 def test_bad_time_keys(text):
-    with pytest.raises(ParameterError, match=r"must look like SECONDS=FILE \(e\.g\. 4\.0=pose\.bvh\)"):
+    with pytest.raises(ParameterError, match=r"must look like SECONDS=FILE \(e\.g\. 4\.0=pose\.bvh\)") as refused:
         parse_time_key(text)
+    assert len(str(refused.value)) < 100
+
+
+def test_a_key_past_any_song_is_refused_before_it_overflows():
+    """Issue 48, item 10: --key 1e308=... became an infinite frame (exit 70)."""
+    with pytest.raises(ParameterError, match="--key .*past any song's end"):
+        parse_time_key("1e308=pose.bvh")
 
 
 def test_poses_from_any_frame(tmp_path):

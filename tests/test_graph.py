@@ -289,6 +289,9 @@ def test_cli_graph_and_build(tiny_graph, tmp_path, capsys):
     code = main(["graph", str(SONG), "-o", str(bad), "--checkpoint", str(checkpoint), "--repertoire", str(tmp_path / "missing.npz")])
     err = capsys.readouterr().err
     assert code == 2 and not bad.exists() and "does not exist" in err and "Traceback" not in err
+    code = main(["graph", str(SONG), "-o", str(bad), "--checkpoint", str(checkpoint), "--repertoire", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and not bad.exists() and "is a folder, expected a file" in err  # was "does not exist"
 
 
 def test_seeds_give_other_takes_and_the_dance_lists_its_clips(tiny_graph):
@@ -315,3 +318,19 @@ def test_seeds_give_other_takes_and_the_dance_lists_its_clips(tiny_graph):
     locked = beat_lock(paper, np.arange(0, music.num_frames, 12)).motion
     retimed = locked.metadata["clips"]
     assert retimed[0]["output_frames"][0] == 0 and retimed[-1]["output_frames"][1] == music.num_frames - 1
+
+
+@pytest.mark.parametrize("flags, words", [
+    (("--warp-smoothing", "nan"), "--warp-smoothing takes a finite number"),
+    (("--warp-smoothing", "inf"), "--warp-smoothing takes a finite number"),
+    (("--warp-smoothing", "1e308"), "warp_smoothing must be 0 to 240"),
+    (("--take-variation", "nan"), "--take-variation takes a finite number"),
+    (("--take-variation", "inf"), "--take-variation takes a finite number"),
+    (("--take-variation", "1e9"), "take_variation must be 0 to 10"),
+])
+def test_graph_numbers_are_refused_by_name_before_any_work(tmp_path, capsys, flags, words):
+    """Issue 48, items 10 and 12: inf and 1e308 were exit 70, NaN was accepted."""
+    out = tmp_path / "dance.bvh"
+    code = main(["graph", str(SONG), "-o", str(out), *flags])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and words in err and not out.exists(), err

@@ -784,3 +784,19 @@ def test_a_query_too_long_for_its_reference_is_a_clear_error():
     with pytest.raises(ValueError, match="no path through 2 reference frames"):
         subsequence_dtw(np.zeros((1, 6)), np.zeros((1, 2)))
     assert subsequence_dtw(np.zeros((1, 3)), np.zeros((1, 2))).shape == (1, 3)  # 3 into 2 still fits
+
+
+# Issue 48, items 10 and 12: the graph's numbers bounded where they are defined ------------------------
+
+@pytest.mark.parametrize("field, value", [("warp_smoothing", math.nan), ("warp_smoothing", math.inf), ("warp_smoothing", 1e308),
+                                          ("take_variation", math.nan), ("take_variation", math.inf), ("top_k", 0)])
+def test_graph_config_refuses_non_finite_and_huge_values_by_name(field, value):
+    from choreo.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=f"^{field} must be"):
+        GraphConfig(**{field: value})
+
+
+def test_a_negative_seed_is_a_take_as_in_generate():
+    rep = toy_repertoire()
+    assert DynamicGraph(rep, GraphConfig(), seed=-1).rng is not None  # numpy refused it (exit 70)

@@ -13,6 +13,7 @@ import pytest
 from choreo.datasets import cache, m2d
 from choreo.datasets.bvh_folder import _read_mapping
 from choreo.errors import DatasetError
+from choreo.music import FEATURE_DIM
 
 
 def clip(tmp_path, frames: int = 40, config=None):
@@ -64,7 +65,7 @@ class FakeMusic:
     @classmethod
     def from_file(cls, path, start=None, end=None):
         cls.analysed += 1
-        return cls(path=path, duration=2.0, fps=30.0, features=np.ones((60, 4)), beat_times=np.array([0.5, 1.0]),
+        return cls(path=path, duration=2.0, fps=30.0, features=np.ones((60, FEATURE_DIM)), beat_times=np.array([0.5, 1.0]),
                    tempo=120.0, start=0.0)
 
 
@@ -79,12 +80,13 @@ def fake_music(monkeypatch, tmp_path):
 
 
 def planted(entry, **arrays):
-    good = {"features": np.ones((60, 4)), "beat_times": np.array([0.5]), "tempo": 120.0, "duration": 2.0, "fps": 30.0}
+    good = {"features": np.ones((60, FEATURE_DIM)), "beat_times": np.array([0.5]), "tempo": 120.0, "duration": 2.0, "fps": 30.0}
     with open(entry, "wb") as handle:
         np.savez(handle, **{**good, **arrays})
 
 
-@pytest.mark.parametrize("bad", [{"features": np.full((60, 4), np.nan)}, {"features": np.ones(60)},
+@pytest.mark.parametrize("bad", [{"features": np.full((60, FEATURE_DIM), np.nan)}, {"features": np.ones(60)},
+                                 {"features": np.ones((60, FEATURE_DIM + 1))},  # issue 48, item 9: train crashed
                                  {"features": np.array(["x"])}, {"beat_times": np.array([np.inf])},
                                  {"fps": -30.0}, {"duration": np.ones(3)}, {"tempo": np.nan}])
 def test_a_planted_cache_entry_is_recomputed_not_trusted(tmp_path, fake_music, bad):
@@ -202,3 +204,77 @@ def test_a_link_planted_at_an_m2d_fit_entry_is_replaced_not_written_through(tmp_
     m2d.load_fit(tmp_path / "DANCE_C_1", recording)
     assert victim.read_bytes() == b"precious" and not entry.is_symlink()
     assert np.load(entry)["rotations"].shape == (40, 24, 4)
+
+
+# Issue 48, item 9: one validating reader for both caches; damage is a miss, writes best effort -----
+
+def test_a_truncated_feature_entry_is_recomputed(tmp_path, fake_music):
+    song = tmp_path / "song.wav"
+    song.write_bytes(b"RIFF" + bytes(100))
+    cache.cached_music(song)
+    entry, = (tmp_path / "cache" / "features").iterdir()
+    entry.write_bytes(entry.read_bytes()[:200])
+    assert np.isfinite(cache.cached_music(song).features).all() and fake_music.analysed == 2
+
+
+def good_fit(frames: int, fps: float) -> dict:
+    from choreo.skeleton import SMPL24
+
+    return {"rotations": np.tile(np.float32([1, 0, 0, 0]), (frames, 24, 1)), "root_positions": np.zeros((frames, 3)),
+            "offsets": SMPL24.offsets, "joint_errors": np.zeros(len(m2d.SMPL_TARGETS)),
+            "fit_error": np.array(0.01), "standard_error": np.array(0.02), "fps": np.array(fps)}
+
+
+def damage_fit(entry, damage, recording):
+    fit = good_fit(recording.num_frames, recording.fps)
+    if damage == "truncated":
+        entry.write_bytes(entry.read_bytes()[:300])  # was BadZipFile: exit 70
+        return
+    if damage == "no offsets":
+        del fit["offsets"]  # was KeyError: exit 70
+    elif damage == "nan":
+        fit["rotations"][3, 5, 0] = np.nan  # was exit 2 naming no cache, and never refitted
+    elif damage == "shape":
+        fit["root_positions"] = np.zeros((recording.num_frames, 2))
+    elif damage == "legless":
+        fit["offsets"] = fit["offsets"] * 0.0
+    elif damage == "fps":
+        fit["fps"] = np.array(recording.fps * 2)
+    with open(entry, "wb") as handle:
+        np.savez(handle, **fit)
+
+
+@pytest.mark.parametrize("damage", ["truncated", "no offsets", "nan", "shape", "legless", "fps"])
+def test_a_damaged_m2d_fit_entry_is_refitted(tmp_path, monkeypatch, damage):
+    monkeypatch.setenv("CHOREO_CACHE_DIR", str(tmp_path / "cache"))
+    fits = []
+    monkeypatch.setattr(m2d, "fit_recording", lambda recording: fits.append(1) or good_fit(recording.num_frames, recording.fps))
+    folder = clip(tmp_path)
+    recording = m2d.read_recording(folder)
+    m2d.load_fit(folder, recording)
+    assert m2d.load_fit(folder, recording) is not None and len(fits) == 1  # a good entry is used
+    damage_fit(m2d._fit_cache_path(folder, recording.fps), damage, recording)
+    fit = m2d.load_fit(folder, recording)
+    assert len(fits) == 2 and np.isfinite(fit["rotations"]).all()
+    m2d.load_fit(folder, recording)
+    assert len(fits) == 2  # the rewritten entry is used
+
+
+@pytest.mark.parametrize("root", ["file", "under a file", "read-only"])
+def test_a_cache_that_cannot_be_written_is_skipped(tmp_path, fake_music, monkeypatch, root):
+    import choreo.fileio
+
+    song, base = tmp_path / "song.wav", tmp_path / "cache"
+    song.write_bytes(b"RIFF" + bytes(100))
+    if root == "read-only":
+        (base / "features").mkdir(parents=True)
+        (base / "features").chmod(0o555)
+        real_access = os.access  # root may write anywhere: say what a user would be told
+        monkeypatch.setattr(choreo.fileio.os, "access", lambda path, mode: False if str(path).startswith(str(base)) else real_access(path, mode))
+    else:
+        base.write_bytes(b"not a folder")  # CHOREO_CACHE_DIR set to a file: was exit 70
+        monkeypatch.setenv("CHOREO_CACHE_DIR", str(base / "deeper" if root == "under a file" else base))
+    for analysed in (1, 2):  # nothing cached: analysed again, and the command goes on
+        assert np.isfinite(cache.cached_music(song).features).all() and fake_music.analysed == analysed
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "song.wav"]
+    assert base.is_file() or not list((base / "features").iterdir())

@@ -56,6 +56,32 @@ def test_a_missing_extra_is_one_line_naming_it(tmp_path, capsys, monkeypatch, wi
     assert not (tmp_path / "dance.npz").exists()
 
 
+@pytest.fixture
+def broken_madmom(tmp_path, monkeypatch):
+    """A madmom that fails while it loads, as old madmom on NumPy 2 (``np.float`` is gone)."""
+    package = tmp_path / "site" / "madmom"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text("import numpy\nnumpy.float\n")
+    modules = __import__("sys").modules
+    for name in [name for name in modules if name == "madmom" or name.startswith("madmom.")]:
+        monkeypatch.delitem(modules, name)
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
+    madmom_tracker.load_madmom.cache_clear()
+    yield
+    madmom_tracker.load_madmom.cache_clear()
+
+
+@pytest.mark.parametrize("command", [("generate",), ("info",)])
+def test_a_madmom_that_breaks_on_import_is_one_line_as_a_missing_one(tmp_path, capsys, monkeypatch, broken_madmom, command):
+    """Issue 48, item 11: the AttributeError was exit 70."""
+    monkeypatch.chdir(tmp_path)
+    outputs = () if command[0] == "info" else ("-o", "dance.npz")
+    code, _, err = run_cli(capsys, command[0], EXAMPLE_SONG, *outputs, "--beat-tracker", "madmom")
+    assert_one_line_error(code, err)
+    assert "fails to import (AttributeError)" in err and 'pip install "choreo[madmom]"' in err
+    assert not (tmp_path / "dance.npz").exists()
+
+
 @pytest.mark.parametrize("flags, words", [
     (("--beat-tracker", "beatnet"), "must be one of choreo, madmom"),
     (("--beat-tracker", "madmom", "--bpm", "120"), "without --beat-tracker"),

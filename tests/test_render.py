@@ -66,6 +66,11 @@ def test_plots(tmp_path, capsys):
 @pytest.mark.parametrize("extra, message, exit_code", [
     (["-o", "{dir}/x.txt"], "use .mp4", 3), (["--plot", "beats", "-o", "{dir}/x.mp4"], "use .png", 3),
     (["--size", "big", "-o", "{dir}/x.png"], "must look like", 2),
+    (["--size", "100000x100000", "-o", "{dir}/x.png"], "--size must be 16 to 7680", 2),  # issue 48: 30 GB asked for
+    (["--size", "\uff16\uff14x48", "-o", "{dir}/x.png"], "must look like", 2),
+    (["--size", "9" * 5000 + "x2", "-o", "{dir}/x.png"], "must look like", 2),
+    (["--fps", "inf", "-o", "{dir}/x.gif"], "--fps takes a finite number", 2),
+    (["--strip", "100000", "-o", "{dir}/x.png"], "--strip must be 1 to 64", 2),
     (["--plot", "speed", "-o", "{dir}/x.png"], "unknown plot", 2), (["-o", "{dir}/missing/x.png"], "does not exist", 3),
 ])  # fmt: skip
 def test_bad_render_requests_are_one_line(tmp_path, capsys, extra, message, exit_code):
@@ -73,3 +78,13 @@ def test_bad_render_requests_are_one_line(tmp_path, capsys, extra, message, exit
     code, err = run(capsys, "render", tmp_path / "d.bvh", *[e.format(dir=tmp_path) for e in extra])
     assert code == exit_code and message in err and len(err.strip().splitlines()) == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.bvh"]
+
+
+def test_render_config_bounds_frames_before_they_are_allocated():
+    """Issue 48, item 10: 100000 x 100000 asked for 30 GB."""
+    from choreo.errors import ParameterError
+    from choreo.render import RenderConfig
+
+    for sizes in ({"width": 100_000, "height": 100_000}, {"width": 8, "height": 480}, {"strip_frames": 0}):
+        with pytest.raises(ParameterError):
+            RenderConfig(**sizes)

@@ -325,3 +325,29 @@ def test_align_root_on_a_single_known_frame_moves_by_its_whole_offset():
 def test_block_constraints_mask_is_boolean_and_frame_by_channel():
     carried = _block_constraints(None, torch.zeros(20, 3), 5, 15, 2)
     assert carried.mask.dtype == torch.bool and carried.mask.shape == (10, 3) and carried.values.shape == (10, 3)
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("guidance", math.nan, "guidance must be 0 to 20"), ("guidance", math.inf, "guidance must be 0 to 20"),
+    ("guidance", 1e308, "guidance must be 0 to 20"), ("style_guidance", math.nan, "style_guidance must be 0 to 20"),
+    ("seed", 2**64, "seed must be"), ("seed", -(2**40), "seed must be"),
+])
+def test_sampling_options_refuse_what_the_sampler_cannot_use(field, value, words):
+    """Issue 48, items 10 and 12: NaN guidance sampled a whole dance of NaN; 1e308 overflowed to it; a
+    seed past 64 bits overflowed torch's generator (exit 70)."""
+    from choreo_sgmd.options import SamplingOptions
+
+    from choreo.errors import ParameterError
+    from choreo.generator.options import parse_options
+
+    with pytest.raises(ParameterError, match=words):
+        parse_options("sgmd", SamplingOptions, {field: value})
+
+
+def test_a_request_seed_is_bounded_for_every_backend():
+    from choreo.errors import ParameterError
+    from choreo.generator import GenerationRequest
+
+    assert GenerationRequest(music=None, seed=-1).seed == -1  # generate takes -1, and so does graph
+    with pytest.raises(ParameterError, match="seed must be"):
+        GenerationRequest(music=None, seed=10**30)

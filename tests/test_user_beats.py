@@ -62,6 +62,13 @@ BAD_FILES = {
     "non-numeric": ("time\n0.5\nabc\n1.5\n", "not a number"),
     "non-numeric downbeat": ("time,beat\n0.5,1\n1.0,x\n", "not a number"),
     "three columns": ("0.5,1,2\n1.0,2,2\n", "two"),
+    # issue 48, item 12: numbers Python reads that no beats file means, and a beat with no tempo
+    "nan first": ("nan\n0.5\n1.0\n", "line 1: 'nan' is not a number"),  # was dropped as a header
+    "inf": ("0.5\ninf\n", "line 2: 'inf' is not a number"),
+    "underscore": ("0.5\n1_0\n1.5\n", "line 2: '1_0' is not a number"),  # float() reads 10
+    "fullwidth digits": ("0.5\n\uff11.0\n", "is not a number"),
+    "fullwidth downbeat": ("time,beat\n0.5,\uff11\n1.0,2\n", "is not a number"),
+    "one beat": ("0.5\n", "has one beat"),  # info said "tempo 0.0 bpm"
 }
 
 
@@ -87,7 +94,7 @@ def test_bad_beat_files_stop_generate_before_any_work(tmp_path, capsys, case):
 @pytest.mark.parametrize("flags, words", [
     (("--bpm", "10"), "--bpm must be 20 to 300"),
     (("--bpm", "400"), "--bpm must be 20 to 300"),
-    (("--bpm", "nan"), "--bpm must be 20 to 300"),
+    (("--bpm", "nan"), "--bpm takes a finite number"),
     (("--bpm", "120", "--beats", "beats.csv"), "not both"),
     (("--beats", "missing.csv"), "no such beats file"),
 ])
@@ -208,3 +215,25 @@ def test_a_beats_line_longer_than_a_beat_is_refused(tmp_path):
     (tmp_path / "beats.txt").write_text("0.5\n" + "1" * 5000 + "\n")
     with pytest.raises(InputError, match="line 2: longer than 256 characters"):
         read_beat_file(tmp_path / "beats.txt")
+
+
+# --- issue 48, item 12: strict numbers, short messages, no tempo from one beat -------------------
+
+def test_a_long_cell_is_not_echoed_whole():
+    with pytest.raises(InputError) as refused:
+        parse_beats("0.5\n" + "9" * 250 + "\n", "beats.txt")
+    assert "is not a number" in str(refused.value) and len(str(refused.value)) < 80
+
+
+def test_a_one_beat_file_gives_info_no_tempo(tmp_path, capsys):
+    (tmp_path / "beats.txt").write_text("0.5\n")
+    code, out, err = run_cli(capsys, "info", EXAMPLE_SONG, "--beats", tmp_path / "beats.txt")
+    assert_one_line_error(code, err)
+    assert "has one beat" in err and "tempo" not in out
+
+
+@pytest.mark.parametrize("value", ["1_20", "\uff11\uff12\uff10", "inf", "9" * 5000])
+def test_bpm_takes_plain_decimals_only(tmp_path, capsys, value):
+    code, _, err = run_cli(capsys, "info", EXAMPLE_SONG, "--bpm", value)
+    assert_one_line_error(code, err)
+    assert "--bpm takes a finite number" in err and len(err) < 100

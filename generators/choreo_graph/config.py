@@ -8,6 +8,7 @@ paper's shapes (conv/graph-conv blocks + GRU + linear; transformer + conv + deco
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 
 FPS = 30
@@ -46,6 +47,15 @@ class TempoConfig:
     content_weight: float = 1.0  # lambda_cm in eq. 2
 
 
+# Beyond a clip's length a warp's smoothing only flattens it (a sigma of 1e308 or inf overflowed the
+# Gaussian's kernel); costs' noise past 10 x their spread is a random walk (inf made every cost NaN).
+MAX_WARP_SMOOTHING = float(CLIP_FRAMES)
+MAX_TAKE_VARIATION = 10.0
+GRAPH_BOUNDS = {"top_k": (1, math.inf), "dtw_stride": (1, math.inf), "blend_frames": (0, math.inf),
+                "warp_smoothing": (0, MAX_WARP_SMOOTHING), "take_variation": (0, MAX_TAKE_VARIATION),
+                "path_cost": (0, math.inf), "key_cost": (0, math.inf)}
+
+
 @dataclass(frozen=True)
 class GraphConfig:
     """Selection, warping and the dynamic graph (paper 3.1-3.3)."""
@@ -73,10 +83,10 @@ class GraphConfig:
     def __post_init__(self):
         from choreo.errors import ParameterError
 
-        if (self.top_k < 1 or self.blend_frames < 0 or self.dtw_stride < 1 or self.take_variation < 0 or self.warp_smoothing < 0
-                or self.path_cost < 0 or self.key_cost < 0):
-            raise ParameterError("top_k and dtw_stride must be >= 1; blend_frames, take_variation, warp_smoothing, "
-                                 "path_cost and key_cost >= 0")
+        for name, (low, high) in GRAPH_BOUNDS.items():
+            value = getattr(self, name)
+            if not low <= value <= high:  # NaN fails every comparison
+                raise ParameterError(f"{name} must be {low:g} to {high:g}, got {str(value)[:24]}")
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ import numpy as np
 import torch
 
 from choreo.errors import InputError, MotionFormatError
-from choreo.fileio import atomic_path
+from choreo.fileio import atomic_path, input_file
 from choreo.formats.safe_arrays import load_npz
 from choreo.motion import Motion
 from choreo.motion.stitch import LEFT_HIP, RIGHT_HIP, frame_local_positions, heading_of, local_positions
@@ -87,9 +87,7 @@ class Repertoire:
 
     @classmethod
     def load(cls, path: str | Path) -> "Repertoire":
-        path = Path(path)
-        if not path.is_file():
-            raise InputError(f"repertoire {path} does not exist")
+        path = input_file(path, "repertoire")
         try:
             try:
                 data = load_npz(path)  # sizes checked before anything is decompressed

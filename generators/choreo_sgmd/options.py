@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from choreo.generator.base import check_seed
+
 SAMPLERS = ("ddim", "ddpm")
 # With style guidance, music guidance on the low-noise 60 % of the chain only: as good, measured over three
 # seeds, and 26 network evaluations per window instead of 30 (docs/results.md, "Style guidance").
@@ -14,6 +16,9 @@ FREE_STYLE_GUIDANCE, CONSTRAINED_STYLE_GUIDANCE = 2.0, 1.0
 # Music guidance, chosen on whole songs: 2.5 (chosen on 5 s windows) rushes whole dances to 1.5 x the real
 # dancers' pace; 1.5 keeps it but loses kinetic realism (docs/results.md, "Whole songs").
 MUSIC_GUIDANCE = 2.0
+# Guidance weights past this only amplify the network's error (at 1e308 the noise overflowed to NaN and
+# the whole dance was sampled before the NaN frames were refused); NaN and inf are refused with them.
+MAX_GUIDANCE = 20.0
 
 
 @dataclass(frozen=True)
@@ -35,8 +40,13 @@ class SamplingOptions:
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
 
     def __post_init__(self):
-        if self.guidance < 0 or (self.style_guidance is not None and self.style_guidance < 0) or self.steps < 1:
-            raise ValueError("guidance and style_guidance must be >= 0 and steps >= 1")
+        for name in ("guidance", "style_guidance"):
+            weight = getattr(self, name)
+            if weight is not None and not 0 <= weight <= MAX_GUIDANCE:  # NaN too
+                raise ValueError(f"{name} must be 0 to {MAX_GUIDANCE:g}, got {weight:g}")
+        if self.steps < 1:
+            raise ValueError(f"steps >= 1 is needed, got {self.steps}")
+        check_seed(self.seed)
         if self.sampler not in SAMPLERS:
             raise ValueError(f"unknown sampler {self.sampler!r} (use ddim or ddpm)")
         if self.guidance_interval is not None:

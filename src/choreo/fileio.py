@@ -15,10 +15,21 @@ import tempfile
 from pathlib import Path
 from typing import IO, Iterator
 
-from .errors import OutputError
+from .errors import InputError, OutputError
 
 STDOUT = "-"
 OUT_OF_SPACE = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}  # a full disk, a quota, a file-size limit
+
+
+def input_file(path: str | os.PathLike, what: str) -> Path:
+    """``path`` when it is a file to read; else one line saying what is there instead (a folder
+    given as a checkpoint or repertoire used to be reported as not existing)."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    if path.is_dir():
+        raise InputError(f"{what} {path} is a folder, expected a file")
+    raise InputError(f"{what} {path} {'is not a regular file' if path.exists() else 'does not exist'}")
 
 
 def check_output_dir(path: str | os.PathLike) -> Path:

@@ -16,8 +16,10 @@ from pathlib import Path
 from typing import Sequence
 
 from ..errors import ParameterError
+from ..numbers import shown
 
-SHARD = re.compile(r"^\s*(\d+)\s*/\s*(\d+)\s*$")
+# ASCII digits (\d also takes fullwidth ones), at most 9 of them: int() of thousands fails (exit 70)
+SHARD = re.compile(r"\s*([0-9]{1,9})\s*/\s*([0-9]{1,9})\s*")
 
 
 @dataclass(frozen=True)
@@ -27,9 +29,9 @@ class Shard:
 
     @classmethod
     def parse(cls, text: str) -> "Shard":
-        match = SHARD.match(text)
+        match = SHARD.fullmatch(text)
         if not match:
-            raise ParameterError(f"--shard takes K/N, e.g. 2/8 (the second of eight), got {text!r}")
+            raise ParameterError(f"--shard takes K/N, e.g. 2/8 (the second of eight), got {shown(text)}")
         index, count = int(match[1]), int(match[2])
         if not 1 <= index <= count:
             raise ParameterError(f"--shard {index}/{count}: K must be 1 to N")

@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from .generate_command import BEAT_TRACKER, BEATS, BPM, beat_source
+from .numbers import Number
 from .progress import progress_bar, stderr_console, stdout_console
 from .text import markup
 
@@ -92,7 +93,7 @@ def convert(
     source: Path = typer.Argument(..., help="Input motion: .bvh, .npz (AIST++ keys), .pkl (AIST++), .json, .glb; - reads stdin."),
     target: str = typer.Argument(..., help="Output path, or - for stdout (needs --format)."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
-    fps: Optional[float] = typer.Option(None, help="Resample to this frame rate."),
+    fps: Optional[float] = typer.Option(None, parser=Number("--fps"), help="Resample to this frame rate."),
     rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo."),
 ) -> None:
     """Convert a motion between BVH, NPZ, AIST++ pkl, JSON, joint-position .npy, glTF (.glb) and FBX.
@@ -104,7 +105,9 @@ def convert(
       choreo convert dance.bvh dance.fbx --rig mixamo      # FBX needs Blender
     """
     from ..formats import check_output_format, read_motion, write_motion
+    from ..motion.motion import MAX_FPS, MIN_FPS
 
+    fps = Number("--fps", MIN_FPS, MAX_FPS)(fps)  # before resampling allocates the frames (inf, 1e6)
     check_output_format(target, format, rig)  # a bad target or rig refused before reading anything
     motion = read_motion(_require_file(source))
     if fps is not None:

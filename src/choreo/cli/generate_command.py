@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Callable, List, Optional
 
 import typer
 
+from ..generator.base import MAX_SEED
+from .numbers import Number
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -26,12 +28,12 @@ STYLE = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text
 CHECKPOINT = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one.")
 GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
 STEPS = typer.Option(None, help="Sampling steps (default: the backend's: 10 DDIM steps for sgmd, 1000 for ddpm).")
-GUIDANCE = typer.Option(None, help="sgmd: classifier-free guidance weight on the music (1 = none; the default is in docs/sgmd.md).")
-STYLE_GUIDANCE = typer.Option(None, "--style-guidance",
+GUIDANCE = typer.Option(None, parser=Number("--guidance"), help="sgmd: classifier-free guidance weight on the music (1 = none; the default is in docs/sgmd.md).")
+STYLE_GUIDANCE = typer.Option(None, "--style-guidance", parser=Number("--style-guidance"),
                               help="sgmd: guidance weight on the --style prompt (default 2, or 1 where frames are "
                                    "given; 1 = none, a third faster).")
 SAMPLER = typer.Option(None, help="sgmd: ddim (default; fast, any number of steps) or ddpm (the full chain).")
-SEED = typer.Option(0, help="Random seed: same seed, same dance.")
+SEED = typer.Option(0, parser=Number("--seed", -MAX_SEED, MAX_SEED, whole=True), help="Random seed: same seed, same dance.")
 FORMAT = typer.Option(None, "--format", "-f", help="Output format; default from the extension.")
 RIG = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo (default: SMPL-24).")
 BEAT_LOCK = typer.Option(True, "--beat-lock/--no-beat-lock",
@@ -42,7 +44,7 @@ FOOTSTEPS = typer.Option(True, "--footsteps/--no-footsteps",
                          help="Plan steps: each foot stands until the body leaves it, then steps (legs by IK; docs/results.md, \"Feet\").")
 SPEED_LIMIT = typer.Option(True, "--speed-limit/--no-speed-limit",
                            help="Spread turns and dashes faster than real dancers move over the frames around them.")
-BPM = typer.Option(None, "--bpm", help="The song's tempo, if you know it (20-300): beats exactly 60/BPM s apart, "
+BPM = typer.Option(None, "--bpm", parser=Number("--bpm"), help="The song's tempo, if you know it (20-300): beats exactly 60/BPM s apart, "
                                        "placed on the song's onsets (default: the tracker's tempo).")
 THREADS = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs this job may use "
                                                     "that other work leaves idle; OMP_NUM_THREADS is honoured). Set it "
@@ -311,19 +313,21 @@ def sampling_flags(generator: str, steps: int | None, guidance: float | None, sa
     one-line error naming the backend."""
     from ..errors import ParameterError
     from ..generator import available_plugins
-    from ..generator.options import option_names
+    from ..generator.options import option_names, parse_options
 
     plugin = available_plugins().get(generator)
     if plugin is None or plugin.factory is None:
         raise ParameterError(f"generator {generator!r} is not available (see choreo generators)")
     takes = option_names(plugin.options) if plugin.options else []
-    given = [flag for flag, value in (("steps", steps), ("guidance", guidance), ("sampler", sampler),
-                                      ("style_guidance", style_guidance))
-             if value is not None and flag not in takes]
+    values = {flag: value for flag, value in (("steps", steps), ("guidance", guidance), ("sampler", sampler),
+                                              ("style_guidance", style_guidance)) if value is not None}
+    given = [flag for flag in values if flag not in takes]
     if given:
         flags = ", ".join(f"--{flag.replace('_', '-')}" for flag in given)
         raise ParameterError(f"{flags} {'is not an option' if len(given) == 1 else 'are not options'} of {generator}"
                              f" (its options: {', '.join(takes) or 'none'})")
+    if values:
+        parse_options(generator, plugin.options, values)  # their values too (--guidance 1e308), before any work
     if constrained:
         from ..pipeline import check_request
 

@@ -8,8 +8,9 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import (BEAT_LOCK, BEAT_TRACKER, BEATS, BPM, CHECKPOINT, FOOT_LOCK, FOOTSTEPS, OUTPUT, RIG, SONG, SPEED_LIMIT, THREADS,
+from .generate_command import (BEAT_LOCK, BEAT_TRACKER, BEATS, BPM, CHECKPOINT, FOOT_LOCK, FOOTSTEPS, OUTPUT, RIG, SEED, SONG, SPEED_LIMIT, THREADS,
                                Settings, beat_source, dance_one, load_backend)
+from .numbers import Number
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -39,11 +40,11 @@ def graph_dance(
     top_k: int = typer.Option(512, "--top-k", "-k", help="Candidate clips per 4 s of music (the paper's K)."),
     motion_graph: bool = typer.Option(False, "--motion-graph", help="Ablation: a plain motion graph (first node of each segment only)."),
     no_retempo: bool = typer.Option(False, "--no-retempo", help="Ablation: use each clip's middle 4 s unwarped."),
-    warp_smoothing: Optional[float] = typer.Option(None, help="Sigma (frames) smoothing each clip's re-timing (default 8); "
+    warp_smoothing: Optional[float] = typer.Option(None, parser=Number("--warp-smoothing"), help="Sigma (frames) smoothing each clip's re-timing (default 8); "
                                                    "0 = the paper's raw DTW path: feet slide twice as much, motion beats recur more regularly."),
-    take_variation: Optional[float] = typer.Option(None, help="Noise, as a share of the costs' spread, that each second of the walk "
+    take_variation: Optional[float] = typer.Option(None, parser=Number("--take-variation"), help="Noise, as a share of the costs' spread, that each second of the walk "
                                                    "draws from --seed (default 0.1); 0 = the paper's deterministic greedy walk."),
-    seed: int = typer.Option(0, help="Which take of the song: each seed is another walk through the repertoire."),
+    seed: int = typer.Option(0, parser=SEED.parser, help="Which take of the song: each seed is another walk through the repertoire."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
     beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
@@ -58,15 +59,15 @@ def graph_dance(
       choreo graph song.mp3 -o dance.npz --style waltz --preview
       choreo graph song.mp3 -o dance.bvh --warp-smoothing 0      # the paper's raw warps
     """
-    from ..errors import ParameterError
+    from choreo_graph.config import GraphConfig
 
-    if top_k < 1 or any(value is not None and value < 0 for value in (warp_smoothing, take_variation)):
-        raise ParameterError("--top-k must be at least 1, --warp-smoothing and --take-variation at least 0")
+    graph_options = {key: value for key, value in (("warp_smoothing", warp_smoothing), ("take_variation", take_variation))
+                     if value is not None}
+    GraphConfig(top_k=top_k, **graph_options)  # checked now, not after the song's analysis
     settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
                         speed_limit, beats=beat_source(bpm, beats, beat_tracker), threads=threads, footsteps=footsteps)
     backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
-                           **{key: value for key, value in (("warp_smoothing", warp_smoothing), ("take_variation", take_variation))
-                              if value is not None})
+                           **graph_options)
     dance_one(backend, song, output, settings)
 
 

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Optional
 
 import typer
 
+SIZE = re.compile(r"\s*([0-9]{1,9})\s*[xX]\s*([0-9]{1,9})\s*")  # ASCII digits: int() also reads fullwidth ones
+
+from ..numbers import shown
+from .numbers import Number
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -17,7 +22,7 @@ def render(
     music: Optional[Path] = typer.Option(None, help="Song to mux into the video (and whose beats --plot beats draws)."),
     plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats) or 'path' (root from above)."),
     size: str = typer.Option("640x480", help="Frame size WIDTHxHEIGHT in pixels."),
-    fps: Optional[float] = typer.Option(None, help="Frame rate of the preview (default: the motion's; GIF at most 15)."),
+    fps: Optional[float] = typer.Option(None, parser=Number("--fps", 1, 120), help="Frame rate of the preview (default: the motion's; GIF at most 15)."),
     strip: int = typer.Option(6, help="PNG: how many moments side by side (1: the middle frame)."),
 ) -> None:
     """Render a motion: a shaded 3D figure the camera follows, with the music; or a beats/path plot.
@@ -54,15 +59,14 @@ def render_config(size: str, fps: float | None, strip: int):
     from ..errors import ParameterError
     from ..render import RenderConfig
 
-    try:
-        width, height = (int(v) for v in size.lower().split("x"))
-    except ValueError:
-        raise ParameterError(f"--size {size!r} must look like 640x480") from None
-    if fps is not None and not 1 <= fps <= 120:
-        raise ParameterError("--fps must lie in 1..120")
-    if strip < 1:
-        raise ParameterError("--strip must be at least 1")
-    return RenderConfig(width=width, height=height, fps=fps, strip_frames=strip)
+    from ..render.video import MAX_SIDE, MAX_STRIP, MIN_SIDE
+
+    match = SIZE.fullmatch(size)
+    if not match:
+        raise ParameterError(f"--size {shown(size)} must look like 640x480")
+    side = Number("--size", MIN_SIDE, MAX_SIDE, whole=True)  # each side, before a frame is allocated
+    return RenderConfig(width=side(match[1]), height=side(match[2]), fps=fps,
+                        strip_frames=Number("--strip", 1, MAX_STRIP, whole=True)(str(strip)))
 
 
 def render_preview(motion, output: Path, config, music: Path | None) -> None:

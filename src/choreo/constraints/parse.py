@@ -10,12 +10,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, ParameterError
+from ..numbers import decimal, shown
 from ..motion import Motion
 from ..skeleton import JOINT_NAMES, LOWER_BODY_JOINTS, UPPER_BODY_JOINTS
 
 JOINT_SETS = {"all": tuple(range(24)), "upper": UPPER_BODY_JOINTS, "lower": LOWER_BODY_JOINTS}
 PATH_SUFFIXES = (".csv", ".txt")
 MAX_PATH_VALUE = 1e4
+MAX_KEY_SECONDS = 24 * 3600.0  # longer than any song, and seconds x fps stays a frame number
 MAX_PATH_BYTES = 32 << 20  # about two million rows: a point a millisecond for half an hour
 
 
@@ -84,12 +86,11 @@ def parse_style_schedule(text: str, duration: float) -> list[tuple[float, float 
 def parse_time_key(text: str) -> tuple[float, str]:
     """'4.0=pose.bvh' -> (4.0, 'pose.bvh')."""
     time, _, source = text.partition("=")
-    try:
-        seconds = float(time)
-    except ValueError:
-        raise ParameterError(f"keyframe {text!r} must look like SECONDS=FILE (e.g. 4.0=pose.bvh)") from None
-    if not source or seconds < 0 or not np.isfinite(seconds):
-        raise ParameterError(f"keyframe {text!r} must look like SECONDS=FILE (e.g. 4.0=pose.bvh)")
+    seconds = decimal(time)
+    if not source or seconds is None or seconds < 0:
+        raise ParameterError(f"--key {shown(text)} must look like SECONDS=FILE (e.g. 4.0=pose.bvh)")
+    if seconds > MAX_KEY_SECONDS:  # 1e308 s overflowed to an infinite frame (exit 70)
+        raise ParameterError(f"--key {shown(text)}: {seconds:g} s is past any song's end")
     return seconds, source
 
 

@@ -12,12 +12,13 @@ import hashlib
 import os
 import stat
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
-from ..errors import MotionFormatError
+from ..errors import ChoreoError, OutputError
 from ..fileio import atomic_output
-from ..formats.safe_arrays import load_npz
+from ..formats.safe_arrays import ZIP_ERRORS, load_npz
 
 MAX_ENTRY_BYTES = 1 << 28  # per array: hours of features; more is not an entry we wrote
 FEATURE_VERSION = 2  # 2: beats tracked on a 96 fps envelope; bump when choreo.music's feature definition changes
@@ -52,32 +53,39 @@ def _cache_key(audio_path: Path, start: float | None, end: float | None) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def _valid_entry(data) -> bool:
-    """Whether a cache entry holds what :func:`cached_music` stores: (T, D) finite float features,
-    finite increasing beat times, a finite tempo, and a finite positive duration and rate."""
-    features, beats = data["features"], data["beat_times"]
-    scalars = [data[key] for key in ("duration", "fps")]
-    return (features.dtype.kind == "f" and features.ndim == 2 and features.size > 0
-            and bool(np.isfinite(features).all())
-            and beats.dtype.kind == "f" and beats.ndim == 1 and bool(np.isfinite(beats).all())
-            and bool(np.all(np.diff(beats) >= 0))
-            and all(s.shape == () and s.dtype.kind in "fi" and np.isfinite(s) and s > 0 for s in scalars)
-            and data["tempo"].shape == () and bool(np.isfinite(data["tempo"])))
+def finite_array(data: dict, key: str, shape: tuple, kinds: str = "f") -> bool:
+    """Whether ``data[key]`` is there, a finite array of a dtype kind in ``kinds`` and of ``shape``
+    (None: any length on that axis): what a cache validator asks of every array it trusts."""
+    array = data.get(key)
+    return (isinstance(array, np.ndarray) and array.dtype.kind in kinds and array.ndim == len(shape)
+            and all(want is None or want == got for want, got in zip(shape, array.shape))
+            and bool(np.isfinite(array).all()))
 
 
-def _read_entry(entry: Path, audio_path: Path, start: float | None):
-    """The cached Music, or None when the entry is missing, damaged or fails :func:`_valid_entry`."""
-    from ..music import Music
+def _valid_features(data: dict) -> bool:
+    """Whether a feature entry holds what :func:`cached_music` stores: (T, FEATURE_DIM) finite
+    features, finite increasing beat times, a finite tempo, and a finite positive duration and
+    rate. (An entry of another width passed an older check, and training then crashed.)"""
+    from ..music import FEATURE_DIM
 
+    return (finite_array(data, "features", (None, FEATURE_DIM)) and data["features"].size > 0
+            and finite_array(data, "beat_times", (None,)) and bool(np.all(np.diff(data["beat_times"]) >= 0))
+            and all(finite_array(data, key, (), "fi") and data[key] > 0 for key in ("duration", "fps"))
+            and finite_array(data, "tempo", (), "fi"))
+
+
+def read_entry(entry: Path, valid: Callable[[dict], bool]) -> dict | None:
+    """The arrays of the cache entry ``entry`` when it is a regular file whose arrays pass
+    ``valid``; None when it is missing, a link, unreadable, truncated or fails ``valid``. The one
+    reader of both caches (features and M2D fits): anything wrong is a miss, recomputed and
+    rewritten by the caller, never an error that leaves a dataset unloadable."""
+    if not is_entry(entry):
+        return None
     try:
         data = load_npz(entry, limit=MAX_ENTRY_BYTES)
-        if not _valid_entry(data):
-            return None
-        return Music(path=audio_path, duration=float(data["duration"]), fps=float(data["fps"]),
-                     features=data["features"], beat_times=data["beat_times"], tempo=float(data["tempo"]),
-                     start=start or 0.0)
-    except (OSError, KeyError, ValueError, MotionFormatError):
-        return None  # recomputed by the caller
+        return data if valid(data) else None
+    except (ChoreoError, *ZIP_ERRORS, KeyError, TypeError, IndexError):
+        return None
 
 
 def cached_music(audio_path: str | os.PathLike, start: float | None = None, end: float | None = None,
@@ -89,9 +97,11 @@ def cached_music(audio_path: str | os.PathLike, start: float | None = None, end:
     if not use_cache:
         return Music.from_file(audio_path, start=start, end=end)
     entry = cache_dir() / "features" / f"{_cache_key(audio_path, start, end)}.npz"
-    music = _read_entry(entry, audio_path, start) if is_entry(entry) else None
-    if music is not None:
-        return music
+    data = read_entry(entry, _valid_features)
+    if data is not None:
+        return Music(path=audio_path, duration=float(data["duration"]), fps=float(data["fps"]),
+                     features=data["features"], beat_times=data["beat_times"], tempo=float(data["tempo"]),
+                     start=start or 0.0)
     music = Music.from_file(audio_path, start=start, end=end)
     write_entry(entry, features=music.features, beat_times=music.beat_times, tempo=music.tempo,
                 duration=music.duration, fps=music.fps)
@@ -110,7 +120,13 @@ def is_entry(entry: Path) -> bool:
 def write_entry(entry: Path, **arrays) -> None:
     """Store ``arrays`` as the NPZ cache entry ``entry``, atomically. No user names a cache entry,
     so a link found at its name was planted there: the link itself is replaced, and the file it
-    points to is never written (an output named by the user is written through its link)."""
-    entry.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_output(entry, follow_links=False) as handle:
-        np.savez(handle, **arrays)
+    points to is never written (an output named by the user is written through its link).
+
+    Best effort: the cache only saves time, so one that cannot be written (its root a file, a
+    read-only folder, a full disk) is skipped and the command goes on without it."""
+    try:
+        entry.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_output(entry, follow_links=False) as handle:
+            np.savez(handle, **arrays)
+    except (OSError, OutputError):
+        return

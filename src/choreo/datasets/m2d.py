@@ -38,7 +38,7 @@ from ..motion import Motion
 from ..motion.motion import MAX_COORDINATE
 from ..skeleton import JOINT_NAMES, SMPL24, forward_kinematics, quaternion_to_matrix
 from .base import TEST, TRAIN, Clip, ProgressCallback
-from .cache import cache_dir, cached_music, is_entry, write_entry
+from .cache import cache_dir, cached_music, finite_array, read_entry, write_entry
 from .clips import align_music_and_motion, leg_length
 from .ik import IKConfig, fit_rotations, one_torch_thread, performer_skeleton
 
@@ -209,17 +209,24 @@ def fit_recording(recording: M2DRecording, config: IKConfig = IK_CONFIG) -> dict
             "fps": np.array(recording.fps)}
 
 
+def _valid_fit(fit: dict, recording: M2DRecording) -> bool:
+    """Whether a cached fit holds what :func:`fit_recording` returns for ``recording``: finite
+    arrays of its frame count and the skeleton's shapes, at its rate, on legs of a usable length
+    (a NaN or legless fit used to be an error no refit could clear)."""
+    frames, joints = recording.num_frames, SMPL24.num_joints
+    return (finite_array(fit, "rotations", (frames, joints, 4)) and finite_array(fit, "root_positions", (frames, 3))
+            and finite_array(fit, "offsets", (joints, 3)) and finite_array(fit, "joint_errors", (len(SMPL_TARGETS),))
+            and all(finite_array(fit, key, (), "fi") for key in ("fit_error", "standard_error", "fps"))
+            and float(fit["fps"]) == recording.fps and leg_length(SMPL24.with_offsets(fit["offsets"])) > 0)
+
+
 def load_fit(folder: str | Path, recording: M2DRecording, use_cache: bool = True) -> dict[str, np.ndarray]:
-    """:func:`fit_recording`, from ``cache_dir()/m2d`` when the same file was fitted before."""
+    """:func:`fit_recording`, from ``cache_dir()/m2d`` when the same file was fitted before and the
+    entry passes :func:`_valid_fit`; anything else there is refitted and rewritten."""
     entry = _fit_cache_path(Path(folder), recording.fps)
-    if use_cache and is_entry(entry):
-        try:
-            with np.load(entry) as cached:
-                fit = {key: cached[key] for key in cached.files}
-            if len(fit["rotations"]) == recording.num_frames:
-                return fit
-        except (OSError, ValueError, KeyError):
-            pass  # a damaged entry is refitted below
+    fit = read_entry(entry, lambda cached: _valid_fit(cached, recording)) if use_cache else None
+    if fit is not None:
+        return fit
     fit = fit_recording(recording)
     if use_cache:
         write_entry(entry, **fit)

@@ -18,13 +18,29 @@ if TYPE_CHECKING:  # keep `choreo generators` fast: no torch/librosa import for 
     from ..music import Music
 
 
+# Seeds any backend takes: numpy's generators refuse negatives and torch's overflow past 64 bits, and
+# SGMD derives a block's seed as seed x 1,000,003 + block; 32 bits of takes is more than anyone dances.
+MAX_SEED = 2**32 - 1
+
+
+def check_seed(seed: int | None) -> None:
+    """Refuse a seed outside +-MAX_SEED in one line (it overflowed inside the backends: exit 70)."""
+    from ..errors import ParameterError
+
+    if seed is not None and not -MAX_SEED <= seed <= MAX_SEED:
+        raise ParameterError(f"seed must be {-MAX_SEED} to {MAX_SEED}, got {str(seed)[:24]}")
+
+
 @dataclass(frozen=True)
 class GenerationRequest:
     music: "Music"
     style: str | None = None  # a genre name, one-hot index or free-text description
-    seed: int | None = None
+    seed: int | None = None  # within +-MAX_SEED
     options: dict[str, Any] = field(default_factory=dict)  # backend-specific, validated by it
     constraints: "Constraints | None" = None  # known frames/joints/root path (controllable generation)
+
+    def __post_init__(self):
+        check_seed(self.seed)
 
 
 class Generator(abc.ABC):

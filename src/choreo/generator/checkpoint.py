@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import contextlib
 import os
-from pathlib import Path
 from typing import Iterator
 
 from ..errors import ChoreoError, InputError
-from ..fileio import atomic_output
+from ..fileio import atomic_output, input_file
 from .archive import check_checkpoint_archive
 
 
@@ -29,9 +28,7 @@ def read_checkpoint(path: str | os.PathLike, generator: str, label: str, format_
     """The state dict of a ``generator`` checkpoint; ``label`` names it in errors ("an SGMD")."""
     import torch
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"checkpoint {path} does not exist")
+    path = input_file(path, "checkpoint")
     check_checkpoint_archive(path)  # sizes first: torch believes what the file says
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)

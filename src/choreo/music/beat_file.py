@@ -31,6 +31,7 @@ from typing import Iterable, Iterator, TextIO
 import numpy as np
 
 from ..errors import InputError
+from ..numbers import decimal, shown
 
 MIN_INTERVAL, MAX_INTERVAL = 0.2, 3.0  # seconds between beats: 300 and 20 bpm
 FLAGS = {"true": 1.0, "false": 0.0, "yes": 1.0, "no": 0.0}
@@ -101,6 +102,8 @@ def parse_beats(text: str | Iterable[str], name: str) -> BeatFile:
         lines.append(line)
     if not lines:
         raise InputError(f"{name} has no beats")
+    if len(lines) < 2:  # one beat has no tempo: `info` said "tempo 0.0 bpm"
+        raise InputError(f"{name} has one beat; give at least two (a tempo needs an interval)")
     times = np.frombuffer(times, dtype=np.float64).copy()
     check_beat_times(times, name, lines)
     return BeatFile(name, times, np.frombuffer(flags, dtype=np.float64) == 1 if width == 2 else None)
@@ -135,16 +138,21 @@ def _rows(lines: Iterable[str]) -> Iterator[tuple[int, list[str]]]:
 
 
 def _is_header(cells: list[str]) -> bool:
-    """A first line whose time cell is a word (``time``, ``beat_time``...), not a number."""
-    return bool(re.fullmatch(r"[A-Za-z_][\w ()\[\].-]*", cells[0]))
+    """A first line whose time cell is a word (``time``, ``beat_time``...), not a number. Words
+    Python reads as numbers (``nan``, ``inf``) are cells, refused as such, not a header skipped."""
+    if not re.fullmatch(r"[A-Za-z_][\w ()\[\].-]*", cells[0]):
+        return False
+    try:
+        float(cells[0])
+        return False
+    except ValueError:
+        return True
 
 
 def _number(cell: str, name: str, line: int, flag: bool = False) -> float:
-    """The cell's value; a downbeat cell (``flag``) may also be true/false or yes/no."""
-    try:
-        value = FLAGS[cell.lower()] if flag and cell.lower() in FLAGS else float(cell)
-    except ValueError:
-        raise InputError(f"{name} line {line}: {cell!r} is not a number") from None
-    if not np.isfinite(value):
-        raise InputError(f"{name} line {line}: {cell!r} is not a number")
+    """The cell's value, a plain decimal (:func:`choreo.numbers.decimal`: not ``0_5``, fullwidth
+    digits or ``nan``); a downbeat cell (``flag``) may also be true/false or yes/no."""
+    value = FLAGS[cell.lower()] if flag and cell.lower() in FLAGS else decimal(cell)
+    if value is None:
+        raise InputError(f"{name} line {line}: {shown(cell)} is not a number")
     return value

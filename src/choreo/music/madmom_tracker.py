@@ -29,7 +29,9 @@ ACTIVATION_FPS = 100  # madmom's beat activation frame rate
 
 @lru_cache(maxsize=1)
 def load_madmom():
-    """The madmom package, or a one-line ParameterError naming the extra that installs it."""
+    """The madmom package, or a one-line ParameterError naming the extra that installs it. An
+    install that breaks on import (old madmom on new NumPy raises AttributeError, others TypeError
+    or ValueError) is no more usable than a missing one, and is told the same way."""
     real = importlib.metadata.distribution
 
     def distribution(name):
@@ -41,6 +43,9 @@ def load_madmom():
         from madmom.features import beats  # noqa: F401  (the tracker's processors)
     except ImportError:
         raise ParameterError(f"--beat-tracker madmom needs madmom: {EXTRA} (its {LICENCE})") from None
+    except Exception as error:  # noqa: BLE001 - whatever a broken package raises while it loads
+        raise ParameterError(f"--beat-tracker madmom needs a working madmom: this one fails to import "
+                             f"({type(error).__name__}); reinstall it: {EXTRA} (its {LICENCE})") from None
     finally:
         importlib.metadata.distribution = real
     return madmom

@@ -25,6 +25,11 @@ VIDEO_SUFFIXES = {".mp4", ".mov", ".mkv", ".webm"}
 GIF_MAX_FPS = 15.0  # GIF frame delays are in hundredths of a second; more frames only bloat the file
 
 
+# Frames are drawn whole in memory: 8K a side at most (100,000 x 100,000 asked for 30 GB before the
+# first frame was drawn), and a PNG strip of at most 64 of them side by side.
+MIN_SIDE, MAX_SIDE, MAX_STRIP = 16, 7680, 64
+
+
 @dataclass(frozen=True)
 class RenderConfig:
     width: int = 640
@@ -32,6 +37,13 @@ class RenderConfig:
     fps: float | None = None  # default: the motion's (GIF: at most GIF_MAX_FPS)
     strip_frames: int = 6  # PNG: this many moments side by side (1: the middle frame alone)
     camera: CameraConfig = CameraConfig()
+
+    def __post_init__(self):
+        if not (MIN_SIDE <= self.width <= MAX_SIDE and MIN_SIDE <= self.height <= MAX_SIDE):
+            raise ParameterError(f"frame size {str(self.width)[:12]}x{str(self.height)[:12]}: each side must be "
+                                 f"{MIN_SIDE} to {MAX_SIDE} pixels")
+        if not 1 <= self.strip_frames <= MAX_STRIP:
+            raise ParameterError(f"a strip must have 1 to {MAX_STRIP} moments, got {str(self.strip_frames)[:12]}")
 
 
 def frames_of(motion: Motion, config: RenderConfig, indices: np.ndarray | None = None,
