@@ -14,7 +14,7 @@ from choreo.errors import ChoreoError, InputError, MotionFormatError, OutputErro
 from choreo.formats import parse_bvh, read_joint_positions, read_motion, write_motion
 from choreo.formats.bvh import write_bvh
 from choreo.motion import Motion
-from choreo.skeleton import SMPL24, euler_to_matrix, matrix_to_euler
+from choreo.skeleton import SMPL24, continuous_euler, euler_to_matrix, matrix_to_euler
 
 TOLERANCE = 1e-4  # 0.1 mm
 
@@ -59,6 +59,41 @@ def test_bvh_round_trip_at_gimbal_lock(tmp_path):
     motion = gimbal_motion()
     write_motion(motion, tmp_path / "lock.bvh")
     assert max_joint_error(read_motion(tmp_path / "lock.bvh"), motion) < TOLERANCE
+
+
+def bvh_rotation_channels(path) -> np.ndarray:
+    """(T, 3 J) the rotation channels of a BVH written by choreo (after the root's 3 positions)."""
+    values = np.loadtxt(str(path), skiprows=path.read_text().splitlines().index("MOTION") + 3, ndmin=2)
+    return values[:, 3:]
+
+
+def test_bvh_curves_are_continuous_for_a_spinning_dancer_and_read_back_the_same(tmp_path):
+    """A root turning two and a half times and a limb swinging through its middle axis's 90 degrees:
+    each frame's Euler triple is the one nearest the previous frame's (no 360 degree wraps, no
+    flips to the other solution), and the rotations read back unchanged."""
+    frames = 150
+    t = np.linspace(0.0, 1.0, frames)
+    axis_angle = np.zeros((frames, 24, 3))
+    axis_angle[:, 0, 1] = 5 * np.pi * t  # the root spins about Y (up)
+    axis_angle[:, 16, 0] = np.pi * (t - 0.5) * 1.6  # the left shoulder swings about X through +-72 degrees
+    axis_angle[:, 18, :] = np.stack([np.sin(9 * t), np.pi / 2 * np.cos(3 * t), 2 * t], axis=1)  # near gimbal
+    motion = Motion.from_axis_angle(np.tile([0.0, 0.9, 0.0], (frames, 1)), axis_angle)
+    write_motion(motion, tmp_path / "spin.bvh")
+    channels = bvh_rotation_channels(tmp_path / "spin.bvh")
+    assert np.abs(np.diff(channels, axis=0)).max() < 45.0  # degrees between frames: no wrap, no flip
+    assert np.ptp(channels) > 720  # the spin accumulates instead of wrapping
+    back = read_motion(tmp_path / "spin.bvh")
+    assert np.abs(back.rotation_matrices() - motion.rotation_matrices()).max() < 1e-5
+
+
+def test_continuous_euler_keeps_each_rotation():
+    rng = np.random.default_rng(3)
+    for order in ("ZXY", "XYZ", "YZX"):
+        angles = matrix_to_euler(euler_to_matrix(rng.uniform(-np.pi, np.pi, (200, 5, 3)), order), order)
+        smooth = continuous_euler(angles)
+        np.testing.assert_allclose(euler_to_matrix(smooth, order), euler_to_matrix(angles, order), atol=1e-12)
+        step = np.abs(np.diff(smooth, axis=0)).sum(-1)
+        assert (step <= np.abs(np.diff(angles, axis=0)).sum(-1) + 1e-9).all()  # never further than as solved
 
 
 def test_bvh_in_centimetres_reads_back_in_metres(tmp_path):

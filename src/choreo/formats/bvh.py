@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import MotionFormatError
 from ..motion import Motion, source_name
 from ..motion.motion import frame_chunks
-from ..skeleton import (SMPL24, Skeleton, elementary_rotation, euler_to_matrix, matrix_to_euler,
+from ..skeleton import (SMPL24, Skeleton, continuous_euler, elementary_rotation, euler_to_matrix, matrix_to_euler,
                         matrix_to_quaternion)
 
 ROTATION_ORDER = "ZXY"
@@ -132,7 +132,7 @@ def _depth_first_order(skeleton: Skeleton) -> list[int]:
 
 def _write_frames(out: io.StringIO, motion: Motion, scale: float) -> None:
     order = _depth_first_order(motion.skeleton)  # channels follow the hierarchy's listing order
-    angles = np.degrees(matrix_to_euler(motion.rotation_matrices(), ROTATION_ORDER))  # (T, J, 3)
+    angles = np.degrees(continuous_euler(matrix_to_euler(motion.rotation_matrices(), ROTATION_ORDER)))  # (T, J, 3)
     values = np.concatenate([motion.root_positions * scale, angles[:, order].reshape(motion.num_frames, -1)], axis=1)
     out.write(f"MOTION\nFrames: {motion.num_frames}\nFrame Time: {1.0 / motion.fps:.8f}\n")
     np.savetxt(out, values, fmt="%.6f", delimiter=" ")

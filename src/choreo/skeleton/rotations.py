@@ -32,6 +32,7 @@ __all__ = [
     "elementary_rotation",
     "euler_to_matrix",
     "matrix_to_euler",
+    "continuous_euler",
 ]
 
 
@@ -276,3 +277,32 @@ def matrix_to_euler(matrix, order: str = "ZXY"):
         first = xp.where(locked, alt_first, first)
         last = xp.where(locked, xp.zeros_like(last), last)
     return xp.stack([first, middle, last], axis=-1)
+
+
+def continuous_euler(angles: np.ndarray) -> np.ndarray:
+    """(T, ..., 3) Tait-Bryan angles (radians, one frame per row) rewritten so each frame's triple is
+    the equivalent one nearest the previous frame's: the same rotations, curves without jumps.
+
+    Each frame's angles solved on their own wrap from +180 to -179 degrees as a joint turns past
+    the back, and flip to the other solution near the middle axis's 90 degrees; a DCC tool that
+    interpolates or resamples the curves then spins the joint the long way round. Every rotation
+    has two triples, (a, b, c) and (a + pi, pi - b, c + pi), each up to whole turns; the one nearer
+    the previous frame (after unwrapping by 2 pi) is kept, as an animator's Euler filter does."""
+    angles = np.asarray(angles, dtype=np.float64)
+    if len(angles) < 2:
+        return angles.copy()
+    other = angles + [np.pi, 0.0, np.pi]
+    other[..., 1] = np.pi - angles[..., 1]
+    out = np.empty_like(angles)
+    out[0] = angles[0]
+    for t in range(1, len(angles)):
+        previous = out[t - 1]
+        first, second = _nearest_turns(angles[t], previous), _nearest_turns(other[t], previous)
+        closer = (np.abs(second - previous).sum(-1) < np.abs(first - previous).sum(-1))[..., None]
+        out[t] = np.where(closer, second, first)
+    return out
+
+
+def _nearest_turns(angles: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """``angles`` plus the whole turns that bring each nearest ``reference``."""
+    return angles + 2 * np.pi * np.round((reference - angles) / (2 * np.pi))
