@@ -4,11 +4,21 @@ import json
 import random
 from pathlib import Path
 
+import numpy as np
 import pytest
-from test_cli import run_cli
+from test_cli import assert_one_line_error, run_cli
 
 from choreo.cli.batch import Shard, already_written
 from choreo.errors import ParameterError
+from choreo.formats import write_motion, write_motions
+from choreo.formats.complete import looks_complete
+from choreo.motion import Motion
+from choreo.skeleton import SMPL24
+
+
+def motion(frames: int = 5) -> Motion:
+    rotations = np.random.default_rng(frames).normal(scale=0.3, size=(frames, 24, 3))
+    return Motion.from_axis_angle(np.zeros((frames, 3)), rotations, fps=30.0, skeleton=SMPL24)
 
 
 def songs(count: int) -> list[Path]:
@@ -38,7 +48,7 @@ def test_shard_parse_accepts_spaces():
 
 
 def test_already_written_needs_every_file(tmp_path):
-    (tmp_path / "a.bvh").write_text("x")
+    write_motion(motion(), tmp_path / "a.bvh")
     assert already_written([str(tmp_path / "a.bvh")])
     assert not already_written([str(tmp_path / "a.bvh"), str(tmp_path / "a.npz")])
     assert not already_written(["-"]) and not already_written([])
@@ -55,8 +65,7 @@ def fake_dance(monkeypatch):
 
     def dance_one(backend, song, outputs, settings, constraints=None):
         danced.append(song.name)
-        for path in outputs:
-            Path(path).write_text("dance")
+        write_motions(motion(), outputs)
         return {"song": str(song), "ok": True, "outputs": outputs}
 
     monkeypatch.setattr(generate_command, "dance_one", dance_one)
@@ -79,18 +88,81 @@ def test_shards_of_a_batch_write_every_song_once(tmp_path, capsys, fake_dance):
 
 def test_skip_existing_dances_only_what_is_missing(tmp_path, capsys, fake_dance):
     files = [tmp_path / f"song{i}.wav" for i in range(3)]
-    (tmp_path / "song0.bvh").write_text("done")
-    (tmp_path / "song0.npz").write_text("done")
-    (tmp_path / "song1.bvh").write_text("half done")  # its npz is missing: danced again
+    write_motions(motion(7), [str(tmp_path / "song0.bvh"), str(tmp_path / "song0.npz"), str(tmp_path / "song1.bvh")])
+    done = (tmp_path / "song0.bvh").read_bytes()  # song1's npz is missing: danced again
     code, out, _ = run_cli(capsys, "generate", *files, "--out-dir", tmp_path, "--skip-existing", "--json", "-f", "bvh,npz")
     assert code == 0
     assert fake_dance == ["song1.wav", "song2.wav"]
     summary = json.loads(out)
     assert [s.get("skipped", False) for s in summary["songs"]] == [True, False, False]
-    assert (tmp_path / "song0.bvh").read_text() == "done"
+    assert (tmp_path / "song0.bvh").read_bytes() == done
 
 
 def test_shard_and_skip_existing_need_a_batch(tmp_path, capsys):
     for flags in (["--shard", "1/2"], ["--skip-existing"]):
         code, _, err = run_cli(capsys, "generate", tmp_path / "a.wav", "-o", tmp_path / "a.bvh", *flags)
         assert code == 2 and "--out-dir" in err
+
+
+@pytest.mark.parametrize("formats", [",", " , ", "", "xyz", "bvh,xyz", "npz,,.mp3"])
+@pytest.mark.parametrize("flags", [[], ["--skip-existing", "--preview"]])
+def test_format_lists_are_checked_before_any_song(tmp_path, capsys, fake_dance, formats, flags):
+    """Issue 48, item 6: ``,`` danced every song, wrote nothing and said ok (with --skip-existing
+    --preview: exit 70); an unknown format failed song by song (exit 1). Now up front: exit 2 for a
+    list of none, 3 for an unknown format (as an unknown -o extension)."""
+    songs = [tmp_path / "a.wav", tmp_path / "b.wav"]
+    code, out, err = run_cli(capsys, "generate", *songs, "--out-dir", tmp_path, "-f", formats, "--json", *flags)
+    assert_one_line_error(code, err, 3 if "xyz" in formats or "mp3" in formats else 2)
+    assert "--format" in err and fake_dance == [] and out == "" and sorted(tmp_path.iterdir()) == []
+
+
+def test_a_format_named_twice_is_written_once(tmp_path, capsys, fake_dance):
+    code, out, _ = run_cli(capsys, "generate", tmp_path / "a.wav", "--out-dir", tmp_path, "-f", "bvh,BVH,.bvh, npz",
+                           "--json")
+    assert code == 0
+    assert json.loads(out)["songs"][0]["outputs"] == [str(tmp_path / "a.bvh"), str(tmp_path / "a.npz")]
+
+
+def mp4_box(kind: bytes, body: bytes = b"") -> bytes:
+    return (8 + len(body)).to_bytes(4, "big") + kind + body
+
+
+@pytest.mark.parametrize("ext", ["bvh", "npz", "npy", "glb", "json", "pkl"])
+def test_outputs_cut_short_are_not_whole(tmp_path, ext):
+    """Issue 48, item 7: --skip-existing trusted zero-byte and truncated outputs, so their songs
+    were skipped for ever."""
+    path = tmp_path / f"dance.{ext}"
+    write_motion(motion(40), path)
+    whole = path.read_bytes()
+    assert looks_complete(path)
+    cut = whole[:whole.rindex(b"\n", 0, len(whole) - 1) + 1] if ext == "bvh" else whole[:-1]  # a BVH cut at a row
+    for damaged in (b"", whole[:len(whole) // 2], cut):
+        path.write_bytes(damaged)
+        assert not looks_complete(path), len(damaged)
+
+
+def test_videos_and_fbx_files_cut_short_are_not_whole(tmp_path):
+    from choreo.formats.complete import FBX_HEAD, FBX_TAIL
+
+    video = mp4_box(b"ftyp", b"isom") + mp4_box(b"mdat", bytes(100)) + mp4_box(b"moov", mp4_box(b"mvhd", bytes(20)))
+    fbx = FBX_HEAD + bytes(300) + FBX_TAIL
+    for name, whole in (("a.mp4", video), ("a.fbx", fbx)):
+        path = tmp_path / name
+        path.write_bytes(whole)
+        assert looks_complete(path)
+        for damaged in (b"", whole[:-1], whole[:40]):
+            path.write_bytes(damaged)
+            assert not looks_complete(path)
+    (tmp_path / "b.mp4").write_bytes(mp4_box(b"ftyp", b"isom") + mp4_box(b"mdat", bytes(10)))  # no index
+    assert not looks_complete(tmp_path / "b.mp4")
+
+
+def test_skip_existing_dances_again_over_an_empty_or_truncated_output(tmp_path, capsys, fake_dance):
+    songs = [tmp_path / f"song{i}.wav" for i in range(3)]
+    for i in range(3):
+        write_motion(motion(), tmp_path / f"song{i}.npz")
+    (tmp_path / "song0.npz").write_bytes(b"")
+    (tmp_path / "song1.npz").write_bytes((tmp_path / "song1.npz").read_bytes()[:-30])
+    code, _, _ = run_cli(capsys, "generate", *songs, "--out-dir", tmp_path, "--skip-existing", "-f", "npz")
+    assert code == 0 and fake_dance == ["song0.wav", "song1.wav"]
+    assert all(looks_complete(tmp_path / f"song{i}.npz") for i in range(3))

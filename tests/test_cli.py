@@ -294,6 +294,21 @@ def test_guidance_is_checked_before_the_dance(tmp_path, capsys, monkeypatch, fla
     assert words in err and not (tmp_path / "dance.bvh").exists()
 
 
+@pytest.mark.parametrize("flags, words", [(("--sampler", "ddpm", "--steps", "10"), "ddpm runs all 1000 steps"),
+                                          (("--steps", "1001"), "steps must be 1 to 1000"),
+                                          (("--steps", "9223372036854775808"), "steps must be 1 to 100,000")])
+@pytest.mark.parametrize("command", ["generate", "inbetween", "inpaint", "trajectory"])
+def test_steps_are_checked_before_the_song_is_analysed(tmp_path, capsys, monkeypatch, command, flags, words):
+    """Issue 48, item 8: these were exit 70 once the song had been analysed."""
+    import choreo.music
+
+    monkeypatch.setattr(choreo.music.Music, "from_file", lambda *a, **k: pytest.fail("analysed before the check"))
+    given = {"inbetween": ("--key", "1=pose.bvh"), "inpaint": ("--motion", "dance.bvh"), "trajectory": ("--path", "p.csv")}
+    code, _, err = run_cli(capsys, command, EXAMPLE_SONG, "-o", tmp_path / "out.bvh", *given.get(command, ()), *flags)
+    assert_one_line_error(code, err)
+    assert words in err and not (tmp_path / "out.bvh").exists()
+
+
 def test_a_checkpoint_that_is_a_folder_says_so(tmp_path, capsys):
     (tmp_path / "weights").mkdir()
     code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", "--checkpoint", tmp_path / "weights")

@@ -62,6 +62,31 @@ def test_channels_sharing_one_accessor_convert_it_once(tmp_path, monkeypatch):
     assert len(conversions) == len(set(conversions)) <= 26  # times, root, 24 joints: each once
 
 
+def test_a_glb_of_more_objects_than_any_dance_is_refused_before_it_is_decoded(tmp_path, monkeypatch):
+    """Issue 48, item 13: 100,000 channels on one 8 MB accessor took pygltflib 20-23 s to decode."""
+    import time
+
+    handle = io.BytesIO()
+    gltf.write_glb(dance(), handle)
+    document, blob = glb_chunks(handle.getvalue())
+    document["bufferViews"].append({"buffer": 0, "byteOffset": len(blob), "byteLength": 8 << 20})
+    document["accessors"].append({"bufferView": len(document["bufferViews"]) - 1, "componentType": 5126,
+                                  "count": (8 << 20) // 16, "type": "VEC4"})
+    animation = document["animations"][0]
+    animation["samplers"].append({"input": animation["samplers"][0]["input"], "output": len(document["accessors"]) - 1})
+    channel = {"sampler": len(animation["samplers"]) - 1, "target": {"node": 1, "path": "rotation"}}
+    animation["channels"] += [channel] * 100_000
+    document["buffers"][0]["byteLength"] = len(blob) + (8 << 20)
+    path = tmp_path / "many.glb"
+    path.write_bytes(glb_bytes(document, blob + bytes(8 << 20)))
+    assert read_motion(forged_glb(tmp_path, lambda d: None)).num_frames == 8  # choreo's own: 175 objects
+    monkeypatch.setattr(gltf, "_gltf", lambda: pytest.fail("decoded before the objects were counted"))
+    started = time.perf_counter()
+    with pytest.raises(MotionFormatError, match="more than 20,000 JSON objects"):
+        read_motion(path)
+    assert time.perf_counter() - started < 15
+
+
 @pytest.mark.parametrize("field, value", [("count", 2**63), ("count", 2**64 + 5), ("byteOffset", 2**63),
                                           ("count", -1), ("byteOffset", 1.5)])
 def test_huge_or_odd_counts_and_offsets_are_a_damaged_file(tmp_path, field, value):
@@ -145,6 +170,32 @@ def test_a_motion_json_reads_its_arrays_without_a_python_float_per_number(tmp_pa
     write_motion(dance(2000), tmp_path / "dance.json")
     text = (tmp_path / "dance.json").read_text()
     assert peak_bytes(json_arrays.loads, text, ("rotations", "root_positions", "joint_positions")) < 3 * len(text)
+
+
+def test_a_motion_json_is_written_in_blocks_of_frames_as_one_dumps_wrote_it(tmp_path, monkeypatch):
+    """Issue 48, item 14: ``json.dumps`` of the whole document peaked at 20x the motion (4 GB for 20
+    minutes at 120 fps). Streamed a block at a time, the bytes are the same and the writer holds
+    about what the NPZ writer holds."""
+    from choreo.formats import json_format
+    from choreo.formats.npz import write_npz
+
+    monkeypatch.setattr(json_format, "CHUNK_FRAMES", 64)
+    for frames in (0, 1, 64, 300):
+        motion = dance(frames)
+        motion.metadata["where"] = tmp_path  # written as text (default=str)
+        document = {"format": "choreo-motion", "version": 1, "fps": motion.fps, "joint_names": list(SMPL24.names),
+                    "parents": list(SMPL24.parents), "offsets": np.round(SMPL24.offsets, 6).tolist(),
+                    "root_positions": np.round(motion.root_positions, 6).tolist(),
+                    "rotations": np.round(motion.axis_angle(), 7).tolist(),
+                    "joint_positions": np.round(motion.joint_positions(), 5).tolist(), "metadata": motion.metadata}
+        handle = io.BytesIO()
+        json_format.write_json(motion, handle)
+        assert handle.getvalue() == json.dumps(document, default=str).encode()
+    monkeypatch.setattr(json_format, "CHUNK_FRAMES", 256)
+    with open(tmp_path / "dance.json", "wb") as out, open(tmp_path / "dance.npz", "wb") as npz:
+        streamed = peak_bytes(json_format.write_json, dance(6000), out)  # the whole document: 58 MB
+        stored = peak_bytes(write_npz, dance(6000), npz)
+    assert streamed < 2 * stored + (2 << 20)
 
 
 # -- where outputs come from, and the preview ------------------------------------------------------

@@ -462,7 +462,7 @@ def test_style_guidance_flag_changes_the_dance_and_its_summary(tiny_checkpoint, 
 
 @pytest.mark.parametrize("extra, message", [
     (["--sampler", "euler"], "unknown sampler"),
-    (["--steps", "0"], "steps >= 1"),
+    (["--steps", "0"], "steps must be 1 to 100,000"),
     (["--checkpoint", "missing.pt"], "does not exist"),
 ])  # fmt: skip
 def test_generate_refuses_bad_options_in_one_line(tiny_checkpoint, tmp_path, capsys, extra, message):

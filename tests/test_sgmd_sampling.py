@@ -351,3 +351,29 @@ def test_a_request_seed_is_bounded_for_every_backend():
     assert GenerationRequest(music=None, seed=-1).seed == -1  # generate takes -1, and so does graph
     with pytest.raises(ParameterError, match="seed must be"):
         GenerationRequest(music=None, seed=10**30)
+
+
+@pytest.mark.parametrize("options, timesteps, given, words", [
+    ({"sampler": "ddpm", "steps": 50}, 1000, True, "ddpm runs all 1000 steps"),
+    ({"steps": 1001}, 1000, True, "steps must be 1 to 1000"),
+    ({"steps": 40}, 30, True, "steps must be 1 to 30"),
+])
+def test_steps_a_chain_cannot_take_are_refused(options, timesteps, given, words):
+    """Issue 48, item 8: the sampler found these only after the song was analysed (exit 70)."""
+    from choreo_sgmd.options import SamplingOptions
+
+    with pytest.raises(ValueError, match=words):
+        SamplingOptions(**options).on_chain(timesteps, given)
+
+
+def test_ddpm_without_steps_walks_the_whole_chain_and_steps_are_bounded():
+    from choreo_sgmd.options import MAX_STEPS, SamplingOptions
+
+    from choreo.errors import ParameterError
+    from choreo.generator.options import parse_options
+
+    assert SamplingOptions(sampler="ddpm").on_chain(700, steps_given=False).steps == 700
+    assert SamplingOptions(sampler="ddpm", steps=700).on_chain(700).steps == 700
+    for steps in (2**63, MAX_STEPS + 1, 0, True):
+        with pytest.raises(ParameterError, match="steps must be 1 to 100,000"):
+            parse_options("sgmd", SamplingOptions, {"steps": steps})

@@ -12,6 +12,8 @@ import os
 from choreo.errors import InputError
 from choreo.generator.checkpoint import read_checkpoint, write_checkpoint
 
+from .options import MAX_STEPS
+
 FORMAT_VERSION = 1
 GENERATOR_NAME = "sgmd"
 # What generation needs; training checkpoints also hold the raw weights and the optimiser state.
@@ -21,7 +23,7 @@ INFERENCE_KEYS = ("model_config", "diffusion_config", "train_config", "genres", 
 MAX_LAYERS = 128  # each of decoder and music encoder: sixteen times the paper's 8
 # The noise schedule is built step by step from these before anything else looks at them: 2^31 steps
 # never finish, and a cosine offset of -1 divides by zero. (low, high, whole numbers only)
-DIFFUSION_LIMITS = {"timesteps": (1, 100_000, True), "cosine_offset": (0.0, 1.0, False),
+DIFFUSION_LIMITS = {"timesteps": (1, MAX_STEPS, True), "cosine_offset": (0.0, 1.0, False),
                     "max_beta": (1e-9, 1.0, False)}
 
 

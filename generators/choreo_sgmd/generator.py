@@ -98,8 +98,10 @@ class SGMDGenerator(Generator):
         options = parse_options("sgmd", SamplingOptions, request.options).resolved(constrained)
         if request.seed is not None:
             options = replace(options, seed=request.seed)
-        if options.sampler == "ddpm" and request.options.get("steps") is None:
-            options = replace(options, steps=self.diffusion_config.timesteps)
+        try:
+            options = options.on_chain(self.diffusion_config.timesteps, request.options.get("steps") is not None)
+        except ValueError as error:
+            raise ParameterError(f"sgmd: {error}") from None
         if not request.music.timbre:
             raise ParameterError("sgmd reads the music's MFCC and chroma: analyse the song with them "
                                  "(Music.from_file(path), not timbre=False)")

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 from choreo.generator.base import check_seed
+from choreo.numbers import shown
 
 SAMPLERS = ("ddim", "ddpm")
 # With style guidance, music guidance on the low-noise 60 % of the chain only: as good, measured over three
@@ -19,6 +21,9 @@ MUSIC_GUIDANCE = 2.0
 # Guidance weights past this only amplify the network's error (at 1e308 the noise overflowed to NaN and
 # the whole dance was sampled before the NaN frames were refused); NaN and inf are refused with them.
 MAX_GUIDANCE = 20.0
+# The longest noise chain a checkpoint may have (checkpoint.DIFFUSION_LIMITS), so the most steps any sampler
+# takes: 2^63 steps overflowed torch's linspace (exit 70). The bundled checkpoint's chain is known before it loads.
+MAX_STEPS, BUNDLED_TIMESTEPS = 100_000, 1000
 
 
 @dataclass(frozen=True)
@@ -38,14 +43,15 @@ class SamplingOptions:
     style_guidance: float | None = None
     style_guidance_interval: tuple[float, float] = (0.0, 1.0)  # noise levels t/T where style guidance applies
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
+    bundled_timesteps: ClassVar[int] = BUNDLED_TIMESTEPS  # the CLI checks steps on it before the checkpoint loads
 
     def __post_init__(self):
         for name in ("guidance", "style_guidance"):
             weight = getattr(self, name)
             if weight is not None and not 0 <= weight <= MAX_GUIDANCE:  # NaN too
                 raise ValueError(f"{name} must be 0 to {MAX_GUIDANCE:g}, got {weight:g}")
-        if self.steps < 1:
-            raise ValueError(f"steps >= 1 is needed, got {self.steps}")
+        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or not 1 <= self.steps <= MAX_STEPS:
+            raise ValueError(f"steps must be 1 to {MAX_STEPS:,}, got {shown(str(self.steps))}")
         check_seed(self.seed)
         if self.sampler not in SAMPLERS:
             raise ValueError(f"unknown sampler {self.sampler!r} (use ddim or ddpm)")
@@ -60,6 +66,17 @@ class SamplingOptions:
         """These options with the style guidance decided for a free or a constrained dance."""
         style = CONSTRAINED_STYLE_GUIDANCE if constrained else FREE_STYLE_GUIDANCE
         return replace(self, style_guidance=style if self.style_guidance is None else self.style_guidance)
+
+    def on_chain(self, timesteps: int, steps_given: bool = True) -> "SamplingOptions":
+        """These options on a chain of ``timesteps`` noise levels: DDPM without ``steps_given`` walks the
+        whole chain; steps the sampler cannot take are a ValueError now, not after the song's analysis."""
+        if self.sampler == "ddpm" and not steps_given:
+            return replace(self, steps=timesteps)
+        if self.sampler == "ddpm" and self.steps != timesteps:
+            raise ValueError(f"ddpm runs all {timesteps} steps of the chain: leave out --steps, or use ddim for fewer")
+        if self.steps > timesteps:
+            raise ValueError(f"steps must be 1 to {timesteps} (the checkpoint's noise levels), got {self.steps}")
+        return self
 
     def guided_steps(self, timesteps: int, style_guided: bool = False) -> tuple[int, int]:
         """The diffusion steps t (inclusive) where music guidance applies, for T = ``timesteps``;

@@ -98,7 +98,7 @@ def generate(
     from collections import Counter
 
     from ..errors import ChoreoError, OutputError, ParameterError
-    from .batch import Shard, already_written
+    from .batch import Shard, already_written, batch_formats
 
     if (output is None) == (out_dir is None):
         raise ParameterError("give either -o (one song) or --out-dir (any number of songs)")
@@ -107,7 +107,7 @@ def generate(
     if output is not None and len(songs) > 1:
         raise ParameterError(f"{len(songs)} songs need --out-dir, not -o")
     if out_dir is not None:
-        formats = [f.strip().lower().lstrip(".") for f in (format or "bvh").split(",") if f.strip()]
+        formats = batch_formats(format, rig)
         if not out_dir.is_dir():
             raise OutputError(f"--out-dir {out_dir} is not a folder")  # an output that cannot be written: 3
         stems = Counter(song.stem for song in songs)
@@ -135,7 +135,7 @@ def generate(
         opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=seed_motion is not None)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, checkpoint, constrained=seed_motion is not None)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format if output else None, preview,
                         beat_lock, foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps, style_guidance=style_guidance,
                         beats=beat_source(bpm, beats, beat_tracker), threads=threads)
@@ -199,7 +199,7 @@ def inbetween(
             fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
         return fixed
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, checkpoint, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
                         beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
                         beats=beat_source(bpm, beats, beat_tracker), threads=threads)
@@ -239,7 +239,7 @@ def inpaint(
             raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
         return fixed
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, checkpoint, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
                         beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
                         beats=beat_source(bpm, beats, beat_tracker), threads=threads)
@@ -268,7 +268,7 @@ def trajectory(
         xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
         return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
 
-    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, constrained=True)
+    guidance, sampler = sampling_flags(generator, steps, guidance, sampler, style_guidance, checkpoint, constrained=True)
     settings = Settings(style, checkpoint, generator, steps, guidance, sampler, seed, format, style_guidance=style_guidance,
                         beat_lock=beat_lock, foot_lock=foot_lock, rig=rig, speed_limit=speed_limit, footsteps=footsteps,
                         beats=beat_source(bpm, beats, beat_tracker), threads=threads)
@@ -307,10 +307,11 @@ def beat_source(bpm: float | None, beats: Path | None, tracker: str = "choreo") 
 
 
 def sampling_flags(generator: str, steps: int | None, guidance: float | None, sampler: str | None,
-                   style_guidance: float | None = None, constrained: bool = False) -> tuple:
+                   style_guidance: float | None = None, checkpoint: Path | None = None, constrained: bool = False) -> tuple:
     """The sampling flags given (None: the backend's default), checked against the backend's own
-    options before any work: a flag it does not take, or constraints it cannot keep, are a
-    one-line error naming the backend."""
+    options before any work: a flag it does not take, a value it refuses, steps the bundled
+    checkpoint's chain cannot take (another checkpoint's are checked once it loads), or constraints
+    it cannot keep, are a one-line error naming the backend."""
     from ..errors import ParameterError
     from ..generator import available_plugins
     from ..generator.options import option_names, parse_options
@@ -327,7 +328,13 @@ def sampling_flags(generator: str, steps: int | None, guidance: float | None, sa
         raise ParameterError(f"{flags} {'is not an option' if len(given) == 1 else 'are not options'} of {generator}"
                              f" (its options: {', '.join(takes) or 'none'})")
     if values:
-        parse_options(generator, plugin.options, values)  # their values too (--guidance 1e308), before any work
+        chosen = parse_options(generator, plugin.options, values)  # their values too (--guidance 1e308), before any work
+        chain = getattr(chosen, "bundled_timesteps", None)
+        if checkpoint is None and chain is not None:
+            try:
+                chosen.on_chain(chain, steps is not None)  # --steps 1001, or ddpm with --steps 10
+            except ValueError as error:
+                raise ParameterError(f"{generator}: {error}") from None
     if constrained:
         from ..pipeline import check_request
 

@@ -16,6 +16,7 @@ What we write, so that three.js, Godot, Blender and the Khronos validator read i
 from __future__ import annotations
 
 import json
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,10 @@ BODY_SIDES = 8  # a spindle's cross-section: enough to read as a limb, few enoug
 BONE_RADIUS = 0.035  # metres at a bone's thickest point; thin bones (hands, feet) get less
 BODY_COLOUR = (0.85, 0.55, 0.35, 1.0)
 ANIMATION_NAME = "dance"
+# JSON objects a glb may hold: choreo's hold 175, a rigged character with dozens of clips a few
+# thousand. pygltflib decodes each slowly (a forged file of 100,000 channels on one accessor: 20 s).
+MAX_JSON_OBJECTS = 20_000
+GLB_HEADER, JSON_CHUNK = 20, 0x4E4F534A
 
 
 def _gltf():
@@ -234,6 +239,7 @@ def _cached_accessors(gl, document):
 
 def read_glb(path: str | Path) -> Motion:
     """Read a glb whose first animation keys SMPL-named joints at every frame (as :func:`write_glb` writes)."""
+    _check_object_count(path)
     gl = _gltf()
     try:
         document = gl.GLTF2().load_binary(str(path))
@@ -245,6 +251,29 @@ def read_glb(path: str | Path) -> Motion:
         raise MotionFormatError(f"{path}: damaged glb ({type(error).__name__}: {str(error)[:100]})") from None
     except ParameterError as error:  # values a motion cannot have (a key spacing outside 1-1000 fps)
         raise MotionFormatError(f"{path}: {error}") from None
+
+
+def _check_object_count(path) -> None:
+    """Refuse a glb whose JSON chunk holds more objects than any dance needs, counted on the plain
+    JSON before pygltflib builds a dataclass for each; damage is left to pygltflib's own refusal."""
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(GLB_HEADER)
+            if len(head) < GLB_HEADER or head[:4] != b"glTF" or struct.unpack_from("<I", head, 16)[0] != JSON_CHUNK:
+                return
+            pending = [json.loads(handle.read(struct.unpack_from("<I", head, 12)[0]))]
+    except (OSError, ValueError, RecursionError):
+        return
+    count = 0
+    while pending:
+        item = pending.pop()
+        if isinstance(item, dict):
+            count += 1
+            pending.extend(item.values())
+        elif isinstance(item, list):
+            pending.extend(item)
+        if count > MAX_JSON_OBJECTS:
+            raise MotionFormatError(f"{path}: glb holds more than {MAX_JSON_OBJECTS:,} JSON objects: not a dance choreo reads")
 
 
 def _motion_of(gl, document, path) -> Motion:
