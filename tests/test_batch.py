@@ -166,3 +166,13 @@ def test_skip_existing_dances_again_over_an_empty_or_truncated_output(tmp_path, 
     code, _, _ = run_cli(capsys, "generate", *songs, "--out-dir", tmp_path, "--skip-existing", "-f", "npz")
     assert code == 0 and fake_dance == ["song0.wav", "song1.wav"]
     assert all(looks_complete(tmp_path / f"song{i}.npz") for i in range(3))
+
+
+def test_without_an_output_each_song_is_danced_into_the_current_folder(tmp_path, capsys, fake_dance, monkeypatch):
+    """Issue 47: `choreo generate song.mp3` writes song.bvh here, as whisper and most audio CLIs do."""
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(capsys, "generate", tmp_path / "a.wav", "--json")
+    assert code == 0, err
+    assert json.loads(out)["songs"][0]["outputs"] == ["a.bvh"] and (tmp_path / "a.bvh").stat().st_size > 0
+    code, _, err = run_cli(capsys, "generate", tmp_path / "a.wav", "-o", tmp_path / "b.bvh", "--out-dir", tmp_path)
+    assert code == 2 and "not both" in err

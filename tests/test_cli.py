@@ -314,3 +314,38 @@ def test_a_checkpoint_that_is_a_folder_says_so(tmp_path, capsys):
     code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", "--checkpoint", tmp_path / "weights")
     assert_one_line_error(code, err)
     assert "is a folder, expected a file" in err and "does not exist" not in err
+
+
+def _commands(group, path=()):
+    """(path, click command) for every command and subcommand of the app."""
+    import click
+
+    for name, command in getattr(group, "commands", {}).items():
+        yield (*path, name), command
+        if isinstance(command, click.Group):
+            yield from _commands(command, (*path, name))
+
+
+def test_every_bracket_in_help_reaches_the_screen(monkeypatch, capsys):
+    """Help is rich markup: `pip install "choreo[madmom]"` lost its `[madmom]` (issue 47). Every
+    bracketed text of every option's help and every command's docstring must be shown."""
+    import re
+
+    import typer
+
+    from choreo.cli.app import app
+
+    monkeypatch.setenv("COLUMNS", "400")  # no wrapping inside a bracket
+    checked = 0
+    for path, command in _commands(typer.main.get_command(app)):
+        texts = [command.help or ""] + [getattr(p, "help", None) or "" for p in command.params]
+        wanted = [b.replace("\\[", "[") for t in texts for b in re.findall(r"\\?\[[^\]\n]*\]", t)]
+        if not wanted:
+            continue
+        code, out, _ = run_cli(capsys, *path, "--help")
+        shown = " ".join(out.split())
+        assert code == 0
+        for bracket in wanted:
+            assert " ".join(bracket.split()) in shown, (path, bracket)
+            checked += 1
+    assert checked >= 3

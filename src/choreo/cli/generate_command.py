@@ -50,17 +50,17 @@ THREADS = typer.Option(None, "--threads", min=1, help="CPU threads to dance with
                                                     "that other work leaves idle; OMP_NUM_THREADS is honoured). Set it "
                                                     "for bit-identical reruns: other thread counts round differently.")
 BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
-                                           "(time[,downbeat]) as DAWs and beat trackers export.")
+                                           "(time\\[,downbeat]) as DAWs and beat trackers export.")
 BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
                             help="Who hears the beats: choreo (default, licence-clean) or madmom (pip install "
-                                 "\"choreo[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
+                                 "\"choreo\\[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
 
 
 def generate(
-    songs: List[Path] = typer.Argument(..., help="Audio files: wav, mp3, ogg, flac or opus (several with --out-dir)."),
+    songs: List[Path] = typer.Argument(..., help="Audio files: wav, mp3, ogg, flac or opus."),
     output: Optional[List[str]] = typer.Option(
         None, "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several."),
-    out_dir: Optional[Path] = typer.Option(None, help="Folder for one dance per song, named after the song (batch mode)."),
+    out_dir: Optional[Path] = typer.Option(None, help="Folder for one dance per song, named after the song (default: the current folder)."),
     style: Optional[str] = STYLE,
     seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it."),
     checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR, steps: Optional[int] = STEPS,
@@ -83,7 +83,11 @@ def generate(
     Exit codes: 0 every song danced; 1 some songs failed in a batch (each reported, the rest done);
     2 bad input or options; 3 an output cannot be written.
 
+    Without -o or --out-dir each song's dance is written to the current folder, named after the
+    song (song.mp3 -> song.bvh; --format bvh,npz for more).
+
     Examples:
+      choreo generate song.mp3 --style waltz               # writes song.bvh here
       choreo generate song.mp3 -o dance.bvh --style waltz
       choreo generate song.mp3 -o dance.bvh -o dance.npz --style "slow, romantic, hips leading" --seed 7
       choreo generate song.mp3 -o dance.bvh --style 0:30=waltz,30:=cha-cha --seed-motion opening.bvh
@@ -100,8 +104,10 @@ def generate(
     from ..errors import ChoreoError, OutputError, ParameterError
     from .batch import Shard, already_written, batch_formats
 
-    if (output is None) == (out_dir is None):
-        raise ParameterError("give either -o (one song) or --out-dir (any number of songs)")
+    if output is not None and out_dir is not None:
+        raise ParameterError("give -o (one song) or --out-dir (any number of songs), not both")
+    if output is None and out_dir is None:
+        out_dir = Path(".")  # as whisper and most audio tools: SONG.bvh in the current folder
     if json_summary and output is not None and "-" in output:
         raise ParameterError("--json and -o - both write to standard output: choose one")
     if output is not None and len(songs) > 1:
@@ -165,7 +171,7 @@ def inbetween(
     song: Path = SONG, output: List[str] = OUTPUT,
     start: Optional[str] = typer.Option(None, help="Pose on the first frame: FILE or FILE@FRAME (any motion file)."),
     end: Optional[str] = typer.Option(None, help="Pose on the last frame: FILE or FILE@FRAME."),
-    key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE[@FRAME]; repeat for several."),
+    key: List[str] = typer.Option([], help="Keyframe SECONDS=FILE\\[@FRAME]; repeat for several."),
     style: Optional[str] = STYLE, checkpoint: Optional[Path] = CHECKPOINT, generator: str = GENERATOR,
     steps: Optional[int] = STEPS, guidance: Optional[float] = GUIDANCE, style_guidance: Optional[float] = STYLE_GUIDANCE,
     sampler: Optional[str] = SAMPLER, seed: int = SEED,
