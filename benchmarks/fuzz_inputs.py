@@ -14,6 +14,16 @@ memory cap and a per-input time limit. Each input is classified:
   MEMORY    MemoryError or a failed allocation under the cap
   CRASH     the worker died (a signal from C code)
   ROUNDTRIP a motion accepted, written as BVH and NPZ by choreo, and then refused by choreo
+  WRONG     accepted what must be refused (a beat file of one beat, of `nan`, `0_5` or fullwidth
+            numbers), a cache entry refused instead of recomputed or trusted with the wrong
+            contents, or a link planted in the cache written through
+
+A refusal that only came after a failed allocation under the cap (a checkpoint whose deflated
+record torch inflated first) is MEMORY, and one longer than 1,000 characters is INTERNAL. The
+formats of issue 48: ``trainstate`` (`train --resume` and `--init-from` on the tiny preset),
+``features`` and ``m2dfit`` (cache entries, planted as the entry itself, as a link to a file
+outside the cache, or with the cache root a file), ``beats`` with a 28 MB file, and a checkpoint
+(``sgmd``, ``trainstate``) whose largest record is 1.25 GiB of deflated zeros.
 
 Every non-clean input's bytes go to the findings folder, with a .txt saying what happened.
 
@@ -43,6 +53,8 @@ import time
 import traceback
 import warnings
 import zipfile
+import zlib
+from contextlib import contextmanager
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,11 +64,13 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 EXTENSIONS = {"bvh": ".bvh", "npz": ".npz", "npy": ".npy", "pkl": ".pkl", "glb": ".glb", "json": ".json",
               "wav": ".wav", "csv": ".csv", "beats": ".csv", "m2d": ".json", "m2dcfg": ".json", "sgmd": ".pt",
-              "repertoire": ".npz"}  # fmt: skip
+              "repertoire": ".npz", "trainstate": ".pt", "features": ".npz", "m2dfit": ".npz"}  # fmt: skip
 FORMATS = tuple(EXTENSIONS)
-ZIP_FORMATS = {"npz", "sgmd", "repertoire"}
+ZIP_FORMATS = {"npz", "sgmd", "repertoire", "trainstate", "features", "m2dfit"}
+CACHE_FORMATS = {"features", "m2dfit"}  # cache entries: never refused, a bad one is recomputed
 CLEAN = ("accepted", "refused")
-CLASSES = ("accepted", "refused", "INTERNAL", "HANG", "MEMORY", "CRASH", "ROUNDTRIP")
+CLASSES = ("accepted", "refused", "INTERNAL", "HANG", "MEMORY", "CRASH", "ROUNDTRIP", "WRONG")
+LONGEST_REFUSAL = 1000  # characters: a refusal that echoes a whole cell or file is not one line to read
 DEFAULT_FINDINGS = Path(tempfile.gettempdir()) / "choreo-fuzz-findings"
 
 
@@ -150,9 +164,17 @@ def sgmd_seed(checkpoint: str | os.PathLike | None = None) -> bytes:
 
 
 def _train_tiny(folder: Path) -> Path:
+    from choreo_sgmd import train
+
+    model, config, data = _tiny_training()
+    return train(model, config, data, None, folder / "tiny")
+
+
+def _tiny_training():
+    """(model config, train config, windows) of one step of the tiny preset on synthetic windows."""
     import torch
     from choreo.music import FEATURE_DIM
-    from choreo_sgmd import TrainConfig, WindowTensors, model_config, train
+    from choreo_sgmd import TrainConfig, WindowTensors, model_config
 
     t = torch.arange(150) / 30.0
     motion = torch.zeros(4, 150, 151)
@@ -162,7 +184,59 @@ def _train_tiny(folder: Path) -> Path:
     data = WindowTensors(motion, torch.randn(4, 150, FEATURE_DIM, generator=g), torch.eye(14)[:4],  # the 35-d default
                          torch.ones(4, dtype=torch.bool))
     config = TrainConfig(batch_size=4, max_steps=1, validation_every=1, checkpoint_every=1, prompt_kind="onehot")
-    return train(model_config("tiny", style_dim=14), config, data, None, folder / "tiny")
+    return model_config("tiny", style_dim=14), config, data
+
+
+def trainstate_seed() -> bytes:
+    """A tiny training state, what `train --resume` (OUT/last.pt) and `--init-from` read."""
+    with tempfile.TemporaryDirectory() as folder:
+        return _train_tiny(Path(folder)).read_bytes()
+
+
+@contextmanager
+def cache_at(folder: Path):
+    """choreo's cache (CHOREO_CACHE_DIR) in ``folder`` while the block runs."""
+    before = os.environ.get("CHOREO_CACHE_DIR")
+    os.environ["CHOREO_CACHE_DIR"] = str(folder)
+    try:
+        yield folder
+    finally:
+        if before is None:
+            os.environ.pop("CHOREO_CACHE_DIR", None)
+        else:
+            os.environ["CHOREO_CACHE_DIR"] = before
+
+
+def features_seed() -> bytes:
+    """A feature-cache entry (``features/<key>.npz``) as `prepare` and `train` write it, of the first WAV seed."""
+    from choreo.datasets.cache import cached_music
+
+    with tempfile.TemporaryDirectory() as folder:
+        song = Path(folder) / "song.wav"
+        song.write_bytes(wav_seeds()[0])
+        with cache_at(Path(folder) / "cache") as cache:
+            cached_music(song)
+        return next((cache / "features").glob("*.npz")).read_bytes()
+
+
+def m2d_folder(folder: Path) -> Path:
+    """An M2D clip folder of the seed skeletons.json and config.json."""
+    clip = folder / "DANCE_C_1"
+    clip.mkdir(exist_ok=True)
+    (clip / "skeletons.json").write_bytes(m2d_skeletons_seed())
+    (clip / "config.json").write_bytes(m2d_config_seeds()[0])
+    return clip
+
+
+def m2dfit_seed() -> bytes:
+    """An M2D fit cache entry (``m2d/<clip>_<hash>.npz``) of the seed clip, as `prepare` writes it."""
+    from choreo.datasets.m2d import load_fit, read_recording
+
+    with tempfile.TemporaryDirectory() as folder:
+        clip = m2d_folder(Path(folder))
+        with cache_at(Path(folder) / "cache") as cache:
+            load_fit(clip, read_recording(clip))
+        return next((cache / "m2d").glob("*.npz")).read_bytes()
 
 
 def repertoire_seed() -> bytes:
@@ -194,13 +268,20 @@ def make_seeds(formats=FORMATS, sgmd_checkpoint=None) -> dict[str, list[bytes]]:
         seeds["sgmd"] = [sgmd_seed(sgmd_checkpoint)]
     if "repertoire" in formats:
         seeds["repertoire"] = [repertoire_seed()]
+    if "trainstate" in formats:
+        seeds["trainstate"] = [trainstate_seed()]
+    if "features" in formats:
+        seeds["features"] = [features_seed()]
+    if "m2dfit" in formats:
+        seeds["m2dfit"] = [m2dfit_seed()]
     return {name: seeds[name] for name in formats}
 
 
 # -- byte-level mutations ----------------------------------------------------------------------
 NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 TEXT_NUMBERS = [b"0", b"-1", b"-3", b"1", b"7", b"255", b"65536", b"2147483648", b"99999999999999999999",
-                b"1e308", b"1e-320", b"1e-9", b"-1e308", b"nan", b"inf", b"-inf", b"", b"0.0", b"1e5", b"3e9"]
+                b"1e308", b"1e-320", b"1e-9", b"-1e308", b"nan", b"inf", b"-inf", b"", b"0.0", b"1e5", b"3e9",
+                b"0_5", "\uff11\uff12".encode(), b"9" * 5000, b"9223372036854775808", b"NaN", b"Infinity"]
 BINARY_INTS = [0, 1, 2, 0x7F, 0x80, 0xFF, 0x7FFF, 0xFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF, 1 << 40,
                (1 << 63) - 1, (1 << 64) - 1]
 BINARY_FLOATS = [float("nan"), float("inf"), -float("inf"), 1e308, -1e308, 5e-324, 0.0, -0.0, 1e20]
@@ -514,9 +595,64 @@ def mutate_glb_fields(rng: random.Random, data: bytes, others: list[bytes]) -> b
     return pack_glb(dump_json(rng, document), blob)
 
 
+BOMB_BYTES = 5 << 28  # 1.25 GiB of zeros, deflated to about 1.2 MB: past the workers' 1 GiB cap
+_BOMB: list[tuple[bytes, int]] = []
+
+
+def _deflated_zeros() -> tuple[bytes, int]:
+    """(raw deflate stream, CRC-32) of BOMB_BYTES zero bytes, made once, 16 MiB at a time."""
+    if not _BOMB:
+        packer, chunk, crc, parts = zlib.compressobj(9, zlib.DEFLATED, -15), bytes(1 << 24), 0, []
+        for _ in range(BOMB_BYTES >> 24):
+            parts.append(packer.compress(chunk))
+            crc = zlib.crc32(chunk, crc)
+        _BOMB.append((b"".join(parts) + packer.flush(), crc))
+    return _BOMB[0]
+
+
+def pack_zip(members: list[tuple[str, bytes, int, int, int]]) -> bytes:
+    """A zip of (name, bytes as stored, method, CRC-32, size unpacked) records, written by hand:
+    zipfile cannot take bytes already deflated."""
+    out, central = bytearray(), bytearray()
+    for name, data, method, crc, size in members:
+        raw = name.encode()
+        central += struct.pack("<4s6H3L5H2L", b"PK\1\2", 20, 20, 0, method, 0, 0x21, crc, len(data), size, len(raw),
+                               0, 0, 0, 0, 0, len(out)) + raw
+        out += struct.pack("<4s5H3L2H", b"PK\3\4", 20, 0, method, 0, 0x21, crc, len(data), size, len(raw), 0) + raw
+        out += data
+    end = struct.pack("<4s4H2LH", b"PK\5\6", 0, 0, len(members), len(members), len(central), len(out), 0)
+    return bytes(out + central + end)
+
+
+def checkpoint_bomb(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """A checkpoint whose largest tensor record is 1.25 GiB of deflated zeros (the probe's 1.5 MB
+    file that took 1.8 GB): torch writes records stored, so a deflated one is forged."""
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        members = [(i.filename, archive.read(i)) for i in archive.infolist()]
+    records = [i for i, (name, _) in enumerate(members) if "/data/" in name]
+    bomb = max(records or range(len(members)), key=lambda i: len(members[i][1]))
+    packed, crc = _deflated_zeros()
+    return pack_zip([(name, packed, zipfile.ZIP_DEFLATED, crc, BOMB_BYTES) if i == bomb else
+                     (name, content, zipfile.ZIP_STORED, zlib.crc32(content), len(content))
+                     for i, (name, content) in enumerate(members)])
+
+
+_HUGE_BEATS: list[bytes] = []
+
+
+def huge_beats(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
+    """A beat file of 28 MB (the probe's: it took 1.38 GB), a beat every 0.2 s; a 10-hour song at
+    300 bpm needs about 2 MB."""
+    if not _HUGE_BEATS:
+        _HUGE_BEATS.append("".join(map("{:.3f}\n".format, np.arange(2_900_000) * 0.2)).encode())
+    return _HUGE_BEATS[0]
+
+
 FIELD_MUTATORS = {"npz": mutate_npz_fields, "repertoire": mutate_npz_fields, "pkl": mutate_pickle_fields,
                   "sgmd": mutate_checkpoint_fields, "json": mutate_json_fields, "m2d": mutate_json_fields,
-                  "m2dcfg": mutate_json_fields, "glb": mutate_glb_fields}
+                  "m2dcfg": mutate_json_fields, "glb": mutate_glb_fields, "trainstate": mutate_checkpoint_fields,
+                  "features": mutate_npz_fields, "m2dfit": mutate_npz_fields}
+RARE_MUTATORS = {"sgmd": checkpoint_bomb, "trainstate": checkpoint_bomb, "beats": huge_beats}  # big: 5 % of inputs
 
 
 def mutate(fmt: str, rng: random.Random, seeds: list[bytes]) -> bytes:
@@ -526,6 +662,8 @@ def mutate(fmt: str, rng: random.Random, seeds: list[bytes]) -> bytes:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            if fmt in RARE_MUTATORS and rng.random() < 0.05:
+                return RARE_MUTATORS[fmt](rng, data, seeds)
             if fmt in FIELD_MUTATORS and choice < 0.4:
                 return FIELD_MUTATORS[fmt](rng, data, seeds)
             if fmt in ZIP_FORMATS and choice < 0.8:
@@ -538,6 +676,12 @@ def mutate(fmt: str, rng: random.Random, seeds: list[bytes]) -> bytes:
 # -- the readers, as the CLI calls them --------------------------------------------------------
 class RoundTripError(Exception):
     """choreo accepted a file, wrote it, and refused what it wrote."""
+
+
+class WrongError(Exception):
+    """choreo accepted what it must refuse (an odd number in a beat file, a cache entry of the wrong
+    shape), refused what it must take (a damaged cache entry is a miss, recomputed), or wrote where
+    it must not (through a link planted in the cache)."""
 
 
 def read_motion_file(path: Path) -> None:
@@ -578,11 +722,27 @@ def read_csv_file(path: Path) -> None:
     path_to_frames(*read_root_path(path), 150)
 
 
+PLAIN_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+
+
 def read_beats_file(path: Path) -> None:
-    """`choreo generate --beats`: the beat file's reader and checks."""
+    """`choreo generate --beats`: the beat file's reader and checks. What it accepts must be two or
+    more finite increasing beats, and every row of numbers (Python's float reads them) plain ASCII
+    decimals: `nan` taken for a header, `0_5` read as 5 or fullwidth digits are WRONG."""
     from choreo.music.beat_file import read_beat_file
 
-    read_beat_file(path)
+    times = np.asarray(read_beat_file(path).times)
+    if times.size < 2 or not np.isfinite(times).all() or np.any(np.diff(times) <= 0):
+        raise WrongError(f"accepted {times.size} beats: {times[:4]!r}")
+    for line in path.read_text("utf-8", "replace").splitlines():
+        cells = [c for c in re.split(r"[,;\t ]+", line.strip()) if c]
+        try:
+            [float(c) for c in cells]
+        except (ValueError, OverflowError):
+            continue  # a header or a flag column
+        odd = [c for c in cells if not PLAIN_NUMBER.fullmatch(c)]
+        if odd:
+            raise WrongError(f"accepted the number {ascii(odd[0][:24])}")
 
 
 def read_m2d_clip(path: Path, member: str) -> None:
@@ -630,10 +790,102 @@ def read_repertoire_file(path: Path) -> None:
         repertoire.clip_motion(index).joint_positions()
 
 
+def read_training_state(path: Path) -> None:
+    """`choreo train sgmd --resume` (``path`` as OUT/last.pt) or `--init-from PATH` (by the file's
+    hash), on the tiny preset with one step to go; ValueError is a refusal, as the train command makes it."""
+    from choreo.errors import ParameterError
+    from choreo_sgmd import train
+
+    out = path.parent / "train"
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir()
+    resume = hashlib.sha1(path.read_bytes()).digest()[0] % 2 == 0
+    if resume:
+        shutil.copy(path, out / "last.pt")
+    model, config, data = _tiny_training()
+    try:
+        train(model, config, data, None, out, resume=resume, init_from=None if resume else path)
+    except ValueError as error:
+        raise ParameterError(str(error)) from None
+
+
+def _cache_variant(path: Path) -> int:
+    """How the entry is planted, by the input's hash: 0 a link to a file outside the cache, 1 with
+    the cache root a file, else the entry itself."""
+    return hashlib.sha1(path.read_bytes()).digest()[0] % 8
+
+
+def _from_cache(path: Path, entry_of, load) -> object:
+    """Plant ``path``'s bytes as the cache entry ``entry_of()`` names and run ``load``: whatever is
+    there must be a miss (recomputed) or whole, never a refusal or an error; a planted link's
+    target is never written; a cache that cannot be written is skipped."""
+    from choreo.errors import ChoreoError
+
+    variant, cache, victim = _cache_variant(path), path.parent / "cache", path.parent / "victim.npz"
+    shutil.rmtree(cache, ignore_errors=True)
+    if variant == 1:
+        cache.write_bytes(b"a file, not a folder\n")
+    with cache_at(cache):
+        if variant != 1:
+            entry = entry_of()
+            entry.parent.mkdir(parents=True, exist_ok=True)
+            if variant == 0:
+                victim.write_bytes(path.read_bytes())
+                os.symlink(victim, entry)
+            else:
+                shutil.copy(path, entry)
+        try:
+            result = load()
+        except ChoreoError as error:
+            raise WrongError(f"a cache entry was refused, not recomputed: {str(error)[:200]}") from None
+        finally:
+            if cache.is_file():
+                cache.unlink()
+    if variant == 0 and victim.read_bytes() != path.read_bytes():
+        raise WrongError("wrote through a link planted in the cache")
+    return result
+
+
+def read_features_entry(path: Path) -> None:
+    """`choreo prepare` / `train` / `graph build`: a song's features from the feature cache
+    (``features/<key>.npz``), which must come back as FEATURE_DIM-wide finite features."""
+    from choreo.datasets.cache import _cache_key, cache_dir, cached_music
+    from choreo.music import FEATURE_DIM
+
+    song = path.parent / "song.wav"
+    if not song.exists():
+        song.write_bytes(wav_seeds()[0])
+    music = _from_cache(path, lambda: cache_dir() / "features" / f"{_cache_key(song, None, None)}.npz",
+                        lambda: cached_music(song))
+    features, beats = np.asarray(music.features), np.asarray(music.beat_times)
+    if features.ndim != 2 or features.shape[1] != FEATURE_DIM or not np.isfinite(features).all() \
+            or not np.isfinite(beats).all() or not np.isfinite(music.tempo):
+        raise WrongError(f"a cache entry of features {features.shape} {features.dtype} was trusted")
+
+
+def read_m2dfit_entry(path: Path) -> None:
+    """`choreo prepare` on M2D: the seed clip's fit from the fit cache (``m2d/<clip>_<hash>.npz``),
+    then what load_clip makes of it (the standard motion, on the floor, at 30 fps, its joints)."""
+    from choreo.datasets.m2d import _fit_cache_path, load_fit, place_on_floor, read_recording, standard_motion
+
+    clip = m2d_folder(path.parent)
+    recording = read_recording(clip)
+    fit = _from_cache(path, lambda: _fit_cache_path(clip, recording.fps), lambda: load_fit(clip, recording))
+    metadata = {"source": clip.name, "genre": recording.genre, "dataset": "m2d"}
+    try:
+        motion = place_on_floor(standard_motion(fit, recording.fps, metadata).resample(30.0))
+        positions = motion.joint_positions()
+    except Exception as error:
+        raise WrongError(f"a cache entry was trusted, then failed: {type(error).__name__}: {str(error)[:200]}") from None
+    if not np.isfinite(positions).all():
+        raise WrongError("a cache entry with non-finite values was trusted")
+
+
 TARGETS = {"bvh": read_motion_file, "npz": read_motion_file, "pkl": read_motion_file, "glb": read_motion_file,
            "json": read_motion_file, "npy": read_npy_file, "wav": read_wav_file, "csv": read_csv_file,
            "beats": read_beats_file, "m2d": read_m2d_skeletons, "m2dcfg": read_m2d_config, "sgmd": read_sgmd_file,
-           "repertoire": read_repertoire_file}
+           "repertoire": read_repertoire_file, "trainstate": read_training_state, "features": read_features_entry,
+           "m2dfit": read_m2dfit_entry}
 
 
 def warm_up(seeds: dict[str, list[bytes]]) -> None:
@@ -661,19 +913,38 @@ def classify(fmt: str, data: bytes, folder: Path) -> tuple[str, str]:
         return "accepted", ""
     except ChoreoError as error:
         message = str(error).strip()
-        if error.exit_code in (2, 3) and message and "\n" not in message:
+        cause = _failed_allocation(error)
+        if cause:  # refused, but only once an allocation under the cap had failed: the memory was asked for
+            return "MEMORY", f"refused after a failed allocation: {cause}"
+        if error.exit_code in (2, 3) and message and "\n" not in message and len(message) <= LONGEST_REFUSAL:
             return "refused", message
         return "INTERNAL", f"{type(error).__name__} exit {error.exit_code}: {message!r}"
     except RoundTripError as error:
         return "ROUNDTRIP", str(error)
+    except WrongError as error:
+        return "WRONG", str(error)
     except MemoryError:
         return "MEMORY", "MemoryError"
     except RecursionError:
         return "INTERNAL", "RecursionError"
+    except OverflowError as error:
+        return "INTERNAL", f"OverflowError: {str(error)[:300]}\n{_where(error)}"
     except Exception as error:
         if "alloc" in str(error).lower() and "memory" in str(error).lower():
             return "MEMORY", f"{type(error).__name__}: {str(error)[:200]}"
         return "INTERNAL", f"{type(error).__name__}: {str(error)[:300]}\n{_where(error)}"
+
+
+def _failed_allocation(error: BaseException) -> str:
+    """The MemoryError or failed allocation among ``error``'s causes and contexts, as text ('' if none)."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        seen.add(id(error))
+        text = str(error)
+        if isinstance(error, MemoryError) or ("alloc" in text.lower() and "memory" in text.lower()):
+            return f"{type(error).__name__}: {text[:200]}"
+        error = error.__cause__ or error.__context__
+    return ""
 
 
 def _where(error: BaseException) -> str:

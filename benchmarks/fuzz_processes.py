@@ -18,11 +18,25 @@ process shows. Every case runs ``python -m choreo ...`` in a fresh temporary fol
              read-only (0444) file. clean: exit 0 and ``choreo info`` reads the output back, or exit
              2/3 with exactly one stderr line; either way nothing else in the folder changed.
 
+  options    (issue 48) a command with an odd number (NaN, inf, 1e308, 0_5, fullwidth digits, 5,000
+             digits, 2^63) in a numeric option (--seed, --guidance, --style-guidance, --bpm, --steps,
+             --threads, --fps of convert and eval, render --size, graph --warp-smoothing and
+             --take-variation, inbetween --key), OMP_NUM_THREADS, --sampler with --steps, a --beats
+             file (one beat, nan first, 0_5, fullwidth, a 5,000-digit cell, 28 MB, a sparse 1.5 GB),
+             a batch (--out-dir with --format lists such as `,` or `bvh,BVH,.bvh`, --shard, or
+             --skip-existing over a zero-byte or truncated output) or a --checkpoint that is a zip
+             bomb or a folder (--repertoire too). clean: exit 0 (1 for a batch with failed songs)
+             with every output `choreo info` reads, or 2/3 with one stderr line and nothing written;
+             never exit 0 on a value no option may take, a stderr line over 1,000 characters, "does
+             not exist" for what exists, a peak RSS over 1 GiB, or a write outside the named outputs
+             and CHOREO_CACHE_DIR.
+
 Anything else (another exit code, a traceback, a leftover temporary or process, a multi-line
 error, a hang past 60 s) is a finding, saved as a .txt in the findings folder.
 
     nice -n 19 .venv/bin/python benchmarks/fuzz_processes.py --seconds 300 --seed 0
     .venv/bin/python benchmarks/fuzz_processes.py --cases 4 --seed 1
+    nice -n 10 .venv/bin/python benchmarks/fuzz_processes.py --surfaces options --seed 48
 """
 
 from __future__ import annotations
@@ -47,7 +61,7 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_FINDINGS = Path(tempfile.gettempdir()) / "choreo-process-findings"
-SURFACES = ("interrupt", "target")
+SURFACES = ("interrupt", "target", "options")
 HANG = 60.0  # seconds a case may run before it is a finding
 MAX_DELAY = 1.5
 INTERRUPT_COMMANDS = {
@@ -94,40 +108,48 @@ class Result:
     signalled: bool = False
     seconds: float = 0.0
     stray: list[str] = field(default_factory=list)  # processes left with their cwd in the folder
+    peak: int = 0  # bytes: the process's peak resident memory (ru_maxrss from wait4)
 
 
-def _env() -> dict[str, str]:
+def _env(extra: dict[str, str] | None = None) -> dict[str, str]:
     env = dict(os.environ)
     env.pop("CHOREO_DEBUG", None)
     env["PYTHONPATH"] = os.pathsep.join([str(REPO / "src"), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     env.setdefault("COLUMNS", "100")
+    env.update(extra or {})
     return env
 
 
 def choreo(args: list[str], cwd: Path, signum: int | None = None, delay: float = 0.0,
-           timeout: float = HANG) -> Result:
-    """Run ``python -m choreo ARGS`` in ``cwd``; send ``signum`` after ``delay`` if it still runs."""
+           timeout: float = HANG, env: dict[str, str] | None = None) -> Result:
+    """Run ``python -m choreo ARGS`` in ``cwd`` (with ``env`` added to the environment); send
+    ``signum`` after ``delay`` if it still runs. Output goes to files (nothing blocks on a full
+    pipe) and the process is reaped by wait4, for its peak memory."""
     start = time.monotonic()
-    process = subprocess.Popen([sys.executable, "-m", "choreo", *args], cwd=cwd, env=_env(),
-                               stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               start_new_session=True)
-    signalled = False
-    if signum is not None:
-        try:
-            process.wait(timeout=delay)
-        except subprocess.TimeoutExpired:
-            process.send_signal(signum)
-            signalled = True
-    try:
-        out, err = process.communicate(timeout=max(timeout - (time.monotonic() - start), 1.0))
-        code: int | None = process.returncode
-    except subprocess.TimeoutExpired:
-        with _suppress():
-            os.killpg(process.pid, signal.SIGKILL)
-        out, err = process.communicate()
-        code = None
-    result = Result(code, out.decode("utf-8", "replace"), err.decode("utf-8", "replace"), signalled,
-                    time.monotonic() - start)
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        process = subprocess.Popen([sys.executable, "-m", "choreo", *args], cwd=cwd, env=_env(env),
+                                   stdin=subprocess.DEVNULL, stdout=out, stderr=err, start_new_session=True)
+        signalled, code, usage = False, None, None
+        while True:
+            pid, status, usage = os.wait4(process.pid, os.WNOHANG)
+            if pid:
+                code = process.returncode = os.waitstatus_to_exitcode(status)
+                break
+            elapsed = time.monotonic() - start
+            if signum is not None and not signalled and elapsed >= delay:
+                process.send_signal(signum)
+                signalled = True
+            if elapsed > timeout:
+                with _suppress():
+                    os.killpg(process.pid, signal.SIGKILL)
+                _, status, usage = os.wait4(process.pid, 0)
+                process.returncode = os.waitstatus_to_exitcode(status)
+                break
+            time.sleep(0.01)
+        out.seek(0)
+        err.seek(0)
+        result = Result(code, out.read().decode("utf-8", "replace"), err.read().decode("utf-8", "replace"),
+                        signalled, time.monotonic() - start, peak=usage.ru_maxrss * 1024 if usage else 0)
     result.stray = stray_processes(cwd)
     return result
 
@@ -375,6 +397,186 @@ def target_case(rng: random.Random, inputs: Path) -> Case:
         return Case("target", f"{kind} {target!r}", ["choreo", *args], verdict, detail, result)
 
 
+# -- options: numbers, threads, steps, beat files, batch flags and checkpoints (issue 48) -------------
+NUMBER_VALUES = ("nan", "inf", "-inf", "1e308", "-1e308", "1e30", "1e6", "-1", "0", "3", "0_5", "\uff11\uff12",
+                 "9" * 5000, "9223372036854775808", "2147483648", "99999", "")
+NEVER_NUMBERS = {"nan", "inf", "-inf", "0_5", "\uff11\uff12", ""}  # no option may take these
+GENERATE = ["generate", "song.wav", "-o", "out.bvh"]
+GRAPH = ["graph", "song.wav", "-o", "out.bvh"]
+NUMBER_OPTIONS = {  # name: (arguments, option, how the value is written, the outputs)
+    "convert --fps": (["convert", "dance.npz", "out.bvh"], "--fps", "{}", ["out.bvh"]),
+    "eval --fps": (["eval", "dance.npz"], "--fps", "{}", []),
+    "render --size": (["render", "dance.npz", "-o", "out.gif"], "--size", "{0}x{0}", ["out.gif"]),
+    "generate --seed": (GENERATE, "--seed", "{}", ["out.bvh"]),
+    "generate --guidance": (GENERATE, "--guidance", "{}", ["out.bvh"]),
+    "generate --style-guidance": (GENERATE + ["--style", "waltz"], "--style-guidance", "{}", ["out.bvh"]),
+    "generate --bpm": (GENERATE, "--bpm", "{}", ["out.bvh"]),
+    "generate --steps": (GENERATE, "--steps", "{}", ["out.bvh"]),
+    "generate --threads": (GENERATE, "--threads", "{}", ["out.bvh"]),
+    "graph --seed": (GRAPH, "--seed", "{}", ["out.bvh"]),
+    "graph --warp-smoothing": (GRAPH, "--warp-smoothing", "{}", ["out.bvh"]),
+    "graph --take-variation": (GRAPH, "--take-variation", "{}", ["out.bvh"]),
+    "inbetween --key": (["inbetween", "song.wav", "--start", "dance.npz", "--end", "dance.npz", "-o", "out.bvh"],
+                        "--key", "{}=dance.npz", ["out.bvh"]),
+}
+OMP_VALUES = ("99999", "2147483648", "0", "-3", "x", "4,99999", "1")
+STEP_VALUES = ("1", "10", "1000", "1001", "100001", "9223372036854775808", "0", "-1")
+BEAT_FILES = {  # name: (bytes or a size for a sparse file, must it be refused)
+    "plain": (b"beat_time,downbeat\n0.5,1\n1.0,0\n1.5,0\n2.0,0\n2.5,1\n", False),
+    "one_beat": (b"0.5\n", True), "nan_first": (b"nan\n0.5\n1.0\n1.5\n", True),
+    "underscore": (b"0.5\n1_0\n1.5\n", True), "fullwidth": ("0.5\n\uff11\n1.5\n".encode(), True),
+    "long_cell": (b"0.5\n1.0\n" + b"9" * 5000 + b"\n", True), "huge": (None, False), "sparse": (3 << 29, False),
+}
+BATCH_FORMATS = (",", "", "bvh,BVH,.bvh", "nope", "bvh,nope", "npz", "bvh", "glb,npz")
+SHARDS = ("1/" + "9" * 5000, "0/2", "3/2", "1/0", "nan/2", "1/2", "2/2", "\uff11/2", "1/1")
+OPTION_KINDS = ("number", "threads", "steps", "beats", "batch", "checkpoint")
+PEAK = 1 << 30  # bytes of resident memory a case may take
+LONGEST_LINE = 1000  # characters of one stderr line
+
+
+def _input_fuzzer():
+    """benchmarks/fuzz_inputs.py, for its forged checkpoint and its big beat file."""
+    import importlib.util
+
+    if "fuzz_inputs" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("fuzz_inputs", Path(__file__).with_name("fuzz_inputs.py"))
+        sys.modules["fuzz_inputs"] = module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    return sys.modules["fuzz_inputs"]
+
+
+def make_option_inputs(folder: Path) -> None:
+    """song2.wav (a second song for batches), bomb.pt (the bundled checkpoint with a tensor record
+    forged into 1.25 GiB of deflated zeros) and huge.csv (28 MB of beats)."""
+    fuzz = _input_fuzzer()
+    shutil.copy(folder / "song.wav", folder / "song2.wav")
+    bundled = REPO / "generators" / "choreo_sgmd" / "weights" / "sgmd-cpu-m2d.pt"
+    (folder / "bomb.pt").write_bytes(fuzz.checkpoint_bomb(random.Random(0), bundled.read_bytes(), []))
+    (folder / "huge.csv").write_bytes(fuzz.huge_beats(random.Random(0), b"", []))
+
+
+def _option_setup(rng: random.Random, folder: Path, inputs: Path) -> tuple[str, list[str], dict, list[str], bool]:
+    """(label, arguments, environment, named outputs, must it be refused) of one case, its files made in ``folder``."""
+    for name in ("dance.npz", "song.wav"):
+        shutil.copy(inputs / name, folder / name)
+    kind = rng.choice(OPTION_KINDS)
+    if kind == "number":
+        name = rng.choice(sorted(NUMBER_OPTIONS))
+        args, option, form, outputs = NUMBER_OPTIONS[name]
+        value = rng.choice(NUMBER_VALUES)
+        return f"number {name} {value[:24]!r}", [*args, f"{option}={form.format(value)}"], {}, outputs, \
+            value in NEVER_NUMBERS
+    if kind == "threads":
+        value = rng.choice(OMP_VALUES)
+        if rng.random() < 0.5:
+            return f"threads OMP_NUM_THREADS={value}", GENERATE, {"OMP_NUM_THREADS": value}, ["out.bvh"], False
+        return f"threads --threads={value}", [*GENERATE, f"--threads={value}"], {}, ["out.bvh"], value == "x"
+    if kind == "steps":
+        sampler, steps = rng.choice(("ddpm", "ddim")), rng.choice(STEP_VALUES)
+        command = rng.choice((GENERATE, ["inbetween", "song.wav", "--start", "dance.npz", "-o", "out.bvh"]))
+        return f"steps {command[0]} --sampler {sampler} --steps {steps}", \
+            [*command, "--sampler", sampler, f"--steps={steps}"], {}, ["out.bvh"], False
+    if kind == "beats":
+        name = rng.choice(sorted(BEAT_FILES))
+        content, refuse = BEAT_FILES[name]
+        if name == "huge":
+            shutil.copy(inputs / "huge.csv", folder / "beats.csv")
+        elif isinstance(content, int):
+            with open(folder / "beats.csv", "wb") as handle:
+                handle.truncate(content)  # sparse: no disk used
+        else:
+            (folder / "beats.csv").write_bytes(content)
+        return f"beats {name}", [*GENERATE, "--beats", "beats.csv"], {}, ["out.bvh"], refuse
+    if kind == "batch":
+        shutil.copy(inputs / "song.wav", folder / "song2.wav")
+        formats = rng.choice(BATCH_FORMATS)
+        args = ["generate", "song.wav", "song2.wav", "--out-dir", "outs", f"--format={formats}"]
+        label = f"batch --format {formats!r}"
+        extra = rng.random()
+        if extra < 0.4:
+            shard = rng.choice(SHARDS)
+            args.append(f"--shard={shard}")
+            label += f" --shard {shard[:24]!r}"
+        elif extra < 0.8:
+            (folder / "outs").mkdir()
+            ext = rng.choice(("bvh", "npz"))
+            source = (inputs / ("dance.bvh" if ext == "bvh" else "dance.npz")).read_bytes()
+            left = rng.choice((0, len(source) // 2, len(source) - 1))
+            (folder / "outs" / f"song.{ext}").write_bytes(source[:left])
+            args.append("--skip-existing")
+            label += f" --skip-existing over a {left}-byte song.{ext}"
+        return label, args, {}, ["outs"], formats in (",", "")
+    choice = rng.randrange(4)
+    if choice < 2:
+        shutil.copy(inputs / "bomb.pt", folder / "bomb.pt")
+        args = [*(GENERATE if choice == 0 else GRAPH), "--checkpoint", "bomb.pt"]
+    else:
+        (folder / "afolder").mkdir()
+        args = [*GENERATE, "--checkpoint", "afolder"] if choice == 2 else [*GRAPH, "--repertoire", "afolder"]
+    return f"checkpoint {args[0]} {args[-2]} {args[-1]}", args, {}, ["out.bvh"], True
+
+
+def option_case(rng: random.Random, inputs: Path) -> Case:
+    """One command with an odd option, environment, beat file, batch flag or checkpoint. Clean: exit
+    0 (1 for a batch with failed songs) with every named output readable, or 2/3 with one stderr
+    line and nothing written; never a traceback, a line over 1,000 characters, "does not exist" for
+    something that exists, 1 GiB of memory, an exit 0 on a value no option may take, or a write
+    outside the named outputs and the cache (CHOREO_CACHE_DIR=cache)."""
+    with tempfile.TemporaryDirectory(prefix="choreo-proc-") as tmp:
+        folder = Path(tmp)
+        label, args, env, outputs, refuse = _option_setup(rng, folder, inputs)
+        before = snapshot(folder)
+        result = choreo(args, folder, env={"CHOREO_CACHE_DIR": str(folder / "cache"), **env})
+        after = snapshot(folder)
+        code, lines, problems = result.returncode, stderr_lines(result.stderr), []
+        batch = "--out-dir" in args
+        if result.stray:
+            problems.append(f"processes left: {result.stray}")
+        if temporaries(folder):
+            problems.append(f"temporaries left: {temporaries(folder)}")
+        if result.peak > PEAK:
+            problems.append(f"peak memory {result.peak >> 20} MiB")
+        if any("Traceback" in line for line in lines):
+            problems.append("traceback on stderr")
+        if any(len(line) > LONGEST_LINE for line in lines):
+            problems.append(f"a stderr line of {max(map(len, lines))} characters")
+        if "does not exist" in result.stderr and any((folder / a).exists() for a in args[1:] if "/" not in a):
+            problems.append("says 'does not exist' of something that exists")
+        named = lambda rel: rel == "cache" or rel.startswith("cache/") or \
+            any(rel == o or rel.startswith(o + "/") for o in outputs)  # noqa: E731
+        changed = sorted(rel for rel in set(before) | set(after) if before.get(rel) != after.get(rel))
+        if code is None:
+            problems.insert(0, f"hung past {HANG:.0f} s")
+        elif code == 0 or (batch and code == 1):
+            if code == 0 and refuse:
+                problems.append("exit 0: accepted what it must refuse")
+            made = [rel for rel, entry in after.items() if entry[0] == "file" and before.get(rel) != entry
+                    and any(rel == o or rel.startswith(o + "/") for o in outputs)]
+            if code == 0 and outputs and not made:
+                problems.append("exit 0 but nothing written")
+            for rel in made:
+                check = choreo(["info", rel], folder)
+                if check.returncode != 0:
+                    problems.append(f"`choreo info {rel}` exit {check.returncode}: {check.stderr.strip()[:200]}")
+            if code == 1 and not lines:
+                problems.append("exit 1 without a message")
+        elif code in (2, 3):
+            usage = code == 2 and lines and lines[0].startswith("Usage: choreo") and lines[-1].startswith("Error: ")
+            if len(lines) != 1 and not usage:  # click's usage error (Usage, Try, Error), as for an unknown option
+                problems.append(f"exit {code} with {len(lines)} stderr lines")
+            outside = [rel for rel in changed if not (rel == "cache" or rel.startswith("cache/"))]
+            if outside:
+                problems.append(f"exit {code} but changed: {outside[:5]}")
+        else:
+            problems.insert(0, f"exit {code}")
+        outside = [rel for rel in changed if not named(rel)]
+        if outside:
+            problems.append(f"changed outside the outputs and the cache: {outside[:5]}")
+        verdict = "FINDING" if problems else "clean"
+        detail = "; ".join(problems) or f"exit {code}"
+        return Case("options", label, ["choreo", *args], verdict, detail, result)
+
+
 # -- driver --------------------------------------------------------------------------------------------
 def save_finding(folder: Path, number: int, case: Case) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
@@ -416,6 +618,8 @@ def run(seconds: float | None, cases: int | None, seed: int, findings: Path,
         inputs = Path(tmp)
         make_inputs(inputs)
         commands, notes = usable_commands(inputs, commands) if "interrupt" in surfaces else ([], [])
+        if "options" in surfaces:
+            make_option_inputs(inputs)
         if verbose:
             for note in notes:
                 print(note)
@@ -428,7 +632,8 @@ def run(seconds: float | None, cases: int | None, seed: int, findings: Path,
                 break
             surface = active[turn % len(active)]
             turn += 1
-            case = interrupt_case(rng, inputs, commands) if surface == "interrupt" else target_case(rng, inputs)
+            case = {"interrupt": lambda: interrupt_case(rng, inputs, commands), "target": lambda: target_case(rng, inputs),
+                    "options": lambda: option_case(rng, inputs)}[surface]()
             counts[surface] += 1
             done.append(case)
             if case.verdict == "FINDING":
@@ -456,7 +661,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=None, help="stop after this long (60 s without --cases)")
     parser.add_argument("--cases", type=int, default=None, help="stop after this many cases of each surface")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--surfaces", default=",".join(SURFACES), help="comma list of interrupt, target")
+    parser.add_argument("--surfaces", default=",".join(SURFACES), help="comma list of interrupt, target, options")
     parser.add_argument("--findings", type=Path, default=DEFAULT_FINDINGS)
     args = parser.parse_args(argv)
     seconds = 60.0 if args.seconds is None and args.cases is None else args.seconds

@@ -240,11 +240,16 @@ def damage_fit(entry, damage, recording):
         fit["offsets"] = fit["offsets"] * 0.0
     elif damage == "fps":
         fit["fps"] = np.array(recording.fps * 2)
+    elif damage == "zero quaternion":  # found by the fuzzer (fuzz_inputs m2dfit): trusted, then every load failed
+        fit["rotations"][2, 7] = 0.0
+    elif damage == "far root":  # the same: a root 200 km out passed the fit's checks, then Motion refused it
+        fit["root_positions"][4, 0] = 2e5
     with open(entry, "wb") as handle:
         np.savez(handle, **fit)
 
 
-@pytest.mark.parametrize("damage", ["truncated", "no offsets", "nan", "shape", "legless", "fps"])
+@pytest.mark.parametrize("damage", ["truncated", "no offsets", "nan", "shape", "legless", "fps", "zero quaternion",
+                                    "far root"])
 def test_a_damaged_m2d_fit_entry_is_refitted(tmp_path, monkeypatch, damage):
     monkeypatch.setenv("CHOREO_CACHE_DIR", str(tmp_path / "cache"))
     fits = []

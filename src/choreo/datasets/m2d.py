@@ -217,7 +217,19 @@ def _valid_fit(fit: dict, recording: M2DRecording) -> bool:
     return (finite_array(fit, "rotations", (frames, joints, 4)) and finite_array(fit, "root_positions", (frames, 3))
             and finite_array(fit, "offsets", (joints, 3)) and finite_array(fit, "joint_errors", (len(SMPL_TARGETS),))
             and all(finite_array(fit, key, (), "fi") for key in ("fit_error", "standard_error", "fps"))
-            and float(fit["fps"]) == recording.fps and leg_length(SMPL24.with_offsets(fit["offsets"])) > 0)
+            and float(fit["fps"]) == recording.fps and leg_length(SMPL24.with_offsets(fit["offsets"])) > 0
+            and _makes_motion(fit, recording))
+
+
+def _makes_motion(fit: dict, recording: M2DRecording) -> bool:
+    """Whether the fit makes the standard motion :func:`load_clip` builds from it: no zero
+    quaternion, a root within MAX_COORDINATE once scaled to SMPL's legs (such entries passed the
+    checks above, then every load of the dataset failed on them)."""
+    try:
+        standard_motion(fit, recording.fps, {"source": recording.name})
+    except (ParameterError, DatasetError):
+        return False
+    return True
 
 
 def load_fit(folder: str | Path, recording: M2DRecording, use_cache: bool = True) -> dict[str, np.ndarray]:
