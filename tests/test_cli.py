@@ -349,3 +349,13 @@ def test_every_bracket_in_help_reaches_the_screen(monkeypatch, capsys):
             assert " ".join(bracket.split()) in shown, (path, bracket)
             checked += 1
     assert checked >= 3
+
+
+@pytest.mark.parametrize("args", [["generate", "x.wav", "--bogus"], ["generate", "x.wav", "--threads=-3"],
+                                  ["frobnicate"], ["generate"]])
+def test_usage_errors_are_one_line_naming_the_help(capsys, args):
+    """click's usage errors printed a usage block, a hint and the error (four lines): one line now,
+    like every other bad input (README, "Errors and exit codes")."""
+    code, out, err = run_cli(capsys, *args)
+    assert_one_line_error(code, err)
+    assert "--help" in err and out == ""

@@ -78,7 +78,7 @@ def test_travel_scale_pulls_to_the_target_within_bounds():
 
 
 def test_pace_pass_scales_a_rushing_dance_toward_its_genre():
-    motion = wobbly_walk(speed=1.0, genre="rumba")
+    motion = wobbly_walk(seconds=40.0, speed=1.0, genre="rumba")
     out = paced(motion)
     assert out.metadata["pace"]["model"] == pytest.approx(1.0, rel=0.03)
     assert pace(out.root_positions, FPS) == pytest.approx(0.8, rel=0.03)  # bounded at 1 / 1.25
@@ -89,8 +89,10 @@ def test_pace_pass_scales_a_rushing_dance_toward_its_genre():
     np.testing.assert_array_equal(out.root_positions[:, 1], motion.root_positions[:, 1])
 
 
-def test_pace_pass_leaves_constrained_and_unlabelled_dances_alone():
-    motion = wobbly_walk(speed=1.0)
+def test_pace_pass_leaves_short_constrained_and_unlabelled_dances_alone():
+    motion = wobbly_walk(seconds=40.0, speed=1.0)
+    short = wobbly_walk(seconds=20.0, speed=1.0)
+    assert paced(short) is short  # a few seconds have no pace to speak of
     fixed = np.zeros(len(motion), bool)
     fixed[0] = True
     assert paced(motion, fixed) is motion

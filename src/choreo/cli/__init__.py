@@ -50,10 +50,12 @@ def _run(argv: list[str] | None) -> int:
     except SystemExit as exit_:
         return exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)
     except Exception as error:
-        # Usage errors (unknown command, bad option) come from click, which typer may vendor: they
-        # know how to show themselves. Anything else is a bug.
-        if callable(getattr(error, "show", None)) and isinstance(getattr(error, "exit_code", None), int):
-            error.show()
+        # Usage errors (unknown command, bad option) come from click, which typer may vendor: one
+        # line too, naming the help to read instead of click's usage block. Anything else is a bug.
+        if callable(getattr(error, "format_message", None)) and isinstance(getattr(error, "exit_code", None), int):
+            context = getattr(error, "ctx", None)
+            help_hint = f" (see {context.command_path} --help)" if context is not None else ""
+            _print_error(error.format_message() + help_hint)
             return error.exit_code
         if type(error).__name__ == "Abort":
             _print_error("aborted")
