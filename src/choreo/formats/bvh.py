@@ -29,7 +29,7 @@ from ..errors import MotionFormatError
 from ..motion import Motion, source_name
 from ..motion.motion import frame_chunks
 from ..skeleton import (SMPL24, Skeleton, continuous_euler, elementary_rotation, euler_to_matrix, matrix_to_euler,
-                        matrix_to_quaternion)
+                        matrix_to_quaternion, quaternion_to_matrix)
 
 ROTATION_ORDER = "ZXY"
 UNIT_SCALE = {"m": 1.0, "cm": 100.0}
@@ -75,8 +75,8 @@ def write_bvh(motion: Motion, handle, units: str = "m") -> None:
     scale = UNIT_SCALE[units]
     text = io.StringIO()
     _write_hierarchy(text, motion.skeleton, scale)
-    _write_frames(text, motion, scale)
     handle.write(text.getvalue().encode())
+    _write_frames(handle, motion, scale)
 
 
 def check_joint_names(names, format: str) -> None:
@@ -130,12 +130,21 @@ def _depth_first_order(skeleton: Skeleton) -> list[int]:
     return order
 
 
-def _write_frames(out: io.StringIO, motion: Motion, scale: float) -> None:
+def _write_frames(handle, motion: Motion, scale: float) -> None:
+    """The MOTION block to a binary handle, a chunk of frames at a time: a long dance's rotation
+    matrices and text at once would hold gigabytes (the curves stay continuous across chunks)."""
     order = _depth_first_order(motion.skeleton)  # channels follow the hierarchy's listing order
-    angles = np.degrees(continuous_euler(matrix_to_euler(motion.rotation_matrices(), ROTATION_ORDER)))  # (T, J, 3)
-    values = np.concatenate([motion.root_positions * scale, angles[:, order].reshape(motion.num_frames, -1)], axis=1)
-    out.write(f"MOTION\nFrames: {motion.num_frames}\nFrame Time: {1.0 / motion.fps:.8f}\n")
-    np.savetxt(out, values, fmt="%.6f", delimiter=" ")
+    handle.write(f"MOTION\nFrames: {motion.num_frames}\nFrame Time: {1.0 / motion.fps:.8f}\n".encode())
+    previous = None
+    for frames in frame_chunks(motion.num_frames):
+        solved = matrix_to_euler(quaternion_to_matrix(motion.rotations[frames]), ROTATION_ORDER)
+        angles = continuous_euler(solved, previous)  # (T, J, 3) radians
+        previous = angles[-1]
+        values = np.concatenate([motion.root_positions[frames] * scale,
+                                 np.degrees(angles[:, order]).reshape(len(angles), -1)], axis=1)
+        text = io.StringIO()
+        np.savetxt(text, values, fmt="%.6f", delimiter=" ")
+        handle.write(text.getvalue().encode())
 
 
 # -- reading ---------------------------------------------------------------------------------

@@ -282,8 +282,8 @@ def write_bvh_rig(motion: Motion, handle, rig: Rig | str = "mixamo", units: str 
     scale = UNIT_SCALE[units]
     text = io.StringIO()
     _write_hierarchy(text, on_rig.skeleton, scale, end_sites)
-    _write_frames(text, on_rig, scale)  # bvh.py's: channels in the same depth-first order as the hierarchy
     handle.write(text.getvalue().encode())
+    _write_frames(handle, on_rig, scale)  # bvh.py's: channels in the same depth-first order as the hierarchy
 
 
 def _match_bones(data, rig: Rig, name: str) -> list[int]:

@@ -279,7 +279,7 @@ def matrix_to_euler(matrix, order: str = "ZXY"):
     return xp.stack([first, middle, last], axis=-1)
 
 
-def continuous_euler(angles: np.ndarray) -> np.ndarray:
+def continuous_euler(angles: np.ndarray, previous: np.ndarray | None = None) -> np.ndarray:
     """(T, ..., 3) Tait-Bryan angles (radians, one frame per row) rewritten so each frame's triple is
     the equivalent one nearest the previous frame's: the same rotations, curves without jumps.
 
@@ -287,18 +287,19 @@ def continuous_euler(angles: np.ndarray) -> np.ndarray:
     the back, and flip to the other solution near the middle axis's 90 degrees; a DCC tool that
     interpolates or resamples the curves then spins the joint the long way round. Every rotation
     has two triples, (a, b, c) and (a + pi, pi - b, c + pi), each up to whole turns; the one nearer
-    the previous frame (after unwrapping by 2 pi) is kept, as an animator's Euler filter does."""
+    the previous frame (after unwrapping by 2 pi) is kept, as an animator's Euler filter does.
+    ``previous``: the frame before the first (a curve written in chunks); None keeps the first as solved."""
     angles = np.asarray(angles, dtype=np.float64)
-    if len(angles) < 2:
-        return angles.copy()
     other = angles + [np.pi, 0.0, np.pi]
     other[..., 1] = np.pi - angles[..., 1]
     out = np.empty_like(angles)
-    out[0] = angles[0]
-    for t in range(1, len(angles)):
-        previous = out[t - 1]
-        first, second = _nearest_turns(angles[t], previous), _nearest_turns(other[t], previous)
-        closer = (np.abs(second - previous).sum(-1) < np.abs(first - previous).sum(-1))[..., None]
+    for t in range(len(angles)):
+        if t == 0 and previous is None:
+            out[0] = angles[0]
+            continue
+        reference = out[t - 1] if t else np.asarray(previous, dtype=np.float64)
+        first, second = _nearest_turns(angles[t], reference), _nearest_turns(other[t], reference)
+        closer = (np.abs(second - reference).sum(-1) < np.abs(first - reference).sum(-1))[..., None]
         out[t] = np.where(closer, second, first)
     return out
 
