@@ -124,14 +124,17 @@ def choreo(args: list[str], cwd: Path, signum: int | None = None, delay: float =
            timeout: float = HANG, env: dict[str, str] | None = None) -> Result:
     """Run ``python -m choreo ARGS`` in ``cwd`` (with ``env`` added to the environment); send
     ``signum`` after ``delay`` if it still runs. Output goes to files (nothing blocks on a full
-    pipe) and the process is reaped by wait4, for its peak memory."""
+    pipe) and the process is reaped by wait4. Its peak memory is its own address space's high-water
+    mark (/proc's VmHWM), sampled while it runs: wait4's ru_maxrss also counts the pages of the
+    process it was forked from (a test runner of a gigabyte made every child "peak" at a gigabyte)."""
     start = time.monotonic()
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
         process = subprocess.Popen([sys.executable, "-m", "choreo", *args], cwd=cwd, env=_env(env),
                                    stdin=subprocess.DEVNULL, stdout=out, stderr=err, start_new_session=True)
-        signalled, code, usage = False, None, None
+        signalled, code, peak = False, None, 0
         while True:
-            pid, status, usage = os.wait4(process.pid, os.WNOHANG)
+            peak = max(peak, resident_peak(process.pid))
+            pid, status, _ = os.wait4(process.pid, os.WNOHANG)
             if pid:
                 code = process.returncode = os.waitstatus_to_exitcode(status)
                 break
@@ -142,16 +145,27 @@ def choreo(args: list[str], cwd: Path, signum: int | None = None, delay: float =
             if elapsed > timeout:
                 with _suppress():
                     os.killpg(process.pid, signal.SIGKILL)
-                _, status, usage = os.wait4(process.pid, 0)
+                _, status, _ = os.wait4(process.pid, 0)
                 process.returncode = os.waitstatus_to_exitcode(status)
                 break
             time.sleep(0.01)
         out.seek(0)
         err.seek(0)
         result = Result(code, out.read().decode("utf-8", "replace"), err.read().decode("utf-8", "replace"),
-                        signalled, time.monotonic() - start, peak=usage.ru_maxrss * 1024 if usage else 0)
+                        signalled, time.monotonic() - start, peak=peak)
     result.stray = stray_processes(cwd)
     return result
+
+
+def resident_peak(pid: int) -> int:
+    """Bytes of the process's peak resident memory so far (0 once it is gone or unreadable)."""
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return 0
 
 
 class _suppress:
