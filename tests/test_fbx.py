@@ -118,3 +118,22 @@ def test_refuses_other_skeletons(tmp_path):
     other = SMPL24.__class__(JOINT_NAMES[:23], SMPL24.parents[:23], SMPL24.offsets[:23])
     with pytest.raises(MotionFormatError):
         write_fbx(Motion.rest(3, skeleton=other), tmp_path / "x.fbx")
+
+
+@needs_blender
+def test_the_fbx_curves_of_a_spinning_dancer_do_not_wrap(tmp_path):
+    """Issue 47: a root turning two and a half times and a limb through 70 degrees either way. The
+    FBX Blender builds keeps continuous curves (its importer makes each frame's Euler compatible
+    with the last, and choreo's BVH already is): no key steps anywhere near 360 degrees."""
+    frames = 150
+    t = np.linspace(0.0, 1.0, frames)
+    axis_angle = np.zeros((frames, 24, 3))
+    axis_angle[:, 0, 1] = 5 * np.pi * t
+    axis_angle[:, 16, 0] = np.pi * (t - 0.5) * 1.6
+    write_fbx(Motion.from_axis_angle(np.tile([0.0, 0.9, 0.0], (frames, 1)), axis_angle), tmp_path / "spin.fbx")
+    script = Path(__file__).parent / "blender" / "fbx_curves.py"
+    command = blender_command(script) + [str(tmp_path / "spin.fbx"), str(tmp_path / "curves.json")]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    curves = json.loads((tmp_path / "curves.json").read_text())
+    assert curves["curves"] > 24 and curves["largest_step"] < 90
