@@ -377,3 +377,13 @@ def test_ddpm_without_steps_walks_the_whole_chain_and_steps_are_bounded():
     for steps in (2**63, MAX_STEPS + 1, 0, True):
         with pytest.raises(ParameterError, match="steps must be 1 to 100,000"):
             parse_options("sgmd", SamplingOptions, {"steps": steps})
+
+
+def test_the_chain_the_cli_checks_steps_on_is_the_bundled_checkpoints():
+    """--steps is checked before the bundled checkpoint loads, on SamplingOptions.bundled_timesteps:
+    that number must be the bundled checkpoint's own chain."""
+    from choreo_sgmd import DEFAULT_CHECKPOINT
+    from choreo_sgmd.checkpoint import load_checkpoint
+    from choreo_sgmd.options import SamplingOptions
+
+    assert SamplingOptions.bundled_timesteps == load_checkpoint(DEFAULT_CHECKPOINT)["diffusion_config"]["timesteps"]

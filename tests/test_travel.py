@@ -12,7 +12,7 @@ from choreo.finishing.root_path import RootPathConfig, smooth_root_path
 from choreo.metrics.whole_song import beat_dip, jerks, median_jerk, whole_song
 from choreo.motion import Motion
 from choreo.motion.filters import low_pass
-from choreo.motion.travel import ground_track, pace, reach
+from choreo.motion.travel import ground_track, pace, track_reach
 
 FPS = 30.0
 
@@ -50,7 +50,7 @@ def test_ground_track_pace_ignores_wobble():
     floor_speed = np.linalg.norm(np.diff(motion.root_positions[:, [0, 2]], axis=0), axis=-1).mean() * FPS
     assert floor_speed > 0.8  # frame to frame, the wobble counts as travel
     assert pace(motion.root_positions, FPS) == pytest.approx(0.5, rel=0.03)
-    assert reach(motion.root_positions, FPS) == pytest.approx(0.5 * (len(motion) - 1) / FPS, rel=0.03)
+    assert track_reach(ground_track(motion.root_positions, FPS)) == pytest.approx(0.5 * (len(motion) - 1) / FPS, rel=0.03)
     assert ground_track(motion.root_positions, FPS).shape == (len(motion), 2)
 
 

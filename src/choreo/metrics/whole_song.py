@@ -16,10 +16,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-import scipy.ndimage
 
-from ..motion.travel import pace, reach
-from ..motion.beats import SPEED_SMOOTHING_SIGMA, mean_joint_speed, motion_beats
+from ..motion.beats import smoothed_speed, speed_minima
+from ..motion.travel import ground_track, track_pace, track_reach
 from .stepping import stepping
 
 
@@ -58,11 +57,10 @@ def jerks(positions: np.ndarray, fps: float) -> tuple[float, float, float]:
 
 def beat_dip(positions: np.ndarray) -> float:
     """Median over motion beats of 1 - speed at the beat / peak speed up to the next beat."""
-    beats = motion_beats(positions)
-    if len(beats) < 2:
+    if len(positions) < 3:
         return float("nan")
-    speed = scipy.ndimage.gaussian_filter1d(mean_joint_speed(np.asarray(positions, dtype=np.float64)),
-                                            SPEED_SMOOTHING_SIGMA)
+    speed = smoothed_speed(np.asarray(positions, dtype=np.float64))
+    beats = speed_minima(speed)
     dips = [1.0 - speed[a] / speed[a:b + 1].max() for a, b in zip(beats[:-1], beats[1:]) if speed[a:b + 1].max() > 0]
     return float(np.median(dips)) if dips else float("nan")
 
@@ -71,6 +69,7 @@ def whole_song(positions: np.ndarray, fps: float) -> WholeSong:
     """Every figure of one whole dance (T, 24, 3)."""
     steps = stepping(positions, fps)
     jerk, root_jerk, body_jerk = jerks(positions, fps)
-    return WholeSong(len(positions) / fps, pace(positions[:, 0], fps), reach(positions[:, 0], fps), steps.planted_share,
+    track = ground_track(np.asarray(positions)[:, 0], fps)
+    return WholeSong(len(positions) / fps, track_pace(track, fps), track_reach(track), steps.planted_share,
                      steps.foot_root_correlation, steps.support_slide, jerk, root_jerk, body_jerk,
                      beat_dip(positions))

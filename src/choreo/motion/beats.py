@@ -17,6 +17,20 @@ def mean_joint_speed(joint_positions: np.ndarray) -> np.ndarray:
                            for steps in frame_chunks(max(len(joint_positions) - 1, 1))])
 
 
+def smoothed_speed(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:
+    """(T-1,) mean joint speed (metres per frame) after Gaussian smoothing: the curve whose minima
+    are the motion beats (metrics, the beat plot and the whole-song beat dip all read it)."""
+    from scipy.ndimage import gaussian_filter1d  # here: every motion reader imports this module
+
+    return gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
+
+
+def speed_minima(speed: np.ndarray) -> np.ndarray:
+    """Frame indices of the local minima (order 1) of a smoothed ``speed`` curve: see motion_beats."""
+    inner = (speed[1:-1] < speed[:-2]) & (speed[1:-1] <= speed[2:])
+    return np.flatnonzero(inner) + 1
+
+
 def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIGMA) -> np.ndarray:
     """Frame indices of motion beats: local minima (order 1) of the smoothed speed.
 
@@ -25,10 +39,6 @@ def motion_beats(joint_positions: np.ndarray, sigma: float = SPEED_SMOOTHING_SIG
     first frame. The reference's strict test (scipy's argrelextrema with np.less) finds no beat
     there at all, or one, depending on the last bit of rounding; on any other speed curve the
     two agree."""
-    from scipy.ndimage import gaussian_filter1d  # here: every motion reader imports this module
-
     if len(joint_positions) < 3:
         return np.zeros(0, dtype=int)
-    speed = gaussian_filter1d(mean_joint_speed(joint_positions), sigma)
-    inner = (speed[1:-1] < speed[:-2]) & (speed[1:-1] <= speed[2:])
-    return np.flatnonzero(inner) + 1
+    return speed_minima(smoothed_speed(joint_positions, sigma))

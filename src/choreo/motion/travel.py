@@ -25,12 +25,11 @@ def track_pace(track: np.ndarray, fps: float) -> float:
     return float(np.linalg.norm(np.diff(track, axis=0), axis=-1).sum() / seconds) if seconds > 0 else 0.0
 
 
+def track_reach(track: np.ndarray) -> float:
+    """A (T, 2) track's farthest distance from where it started (metres)."""
+    return float(np.linalg.norm(track - track[:1], axis=-1).max()) if len(track) else 0.0
+
+
 def pace(root_positions: np.ndarray, fps: float) -> float:
     """Metres per second along the ground track of (T, 3) root positions."""
     return track_pace(ground_track(root_positions, fps), fps)
-
-
-def reach(root_positions: np.ndarray, fps: float) -> float:
-    """The ground track's farthest distance from where it started (metres)."""
-    track = ground_track(root_positions, fps)
-    return float(np.linalg.norm(track - track[:1], axis=-1).max()) if len(track) else 0.0

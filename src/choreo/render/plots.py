@@ -5,12 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from ..errors import OutputError, ParameterError
 from ..fileio import atomic_path
-from ..metrics.beats import SPEED_SMOOTHING_SIGMA, beat_align_score, mean_joint_speed, motion_beats
+from ..metrics.beats import beat_align_score
 from ..motion import Motion
+from ..motion.beats import smoothed_speed, speed_minima
 
 PLOTS = ("beats", "path")
 PLOT_SUFFIXES = {".png", ".svg", ".pdf"}
@@ -29,9 +29,9 @@ def plot_beats(motion: Motion, music_beat_frames: np.ndarray | None, path: Path)
     """Smoothed joint speed with its minima (motion beats) and the music's beats as lines."""
     plt, figure, axes = _figure(10, 3.2)
     positions = motion.joint_positions()
-    speed = gaussian_filter1d(mean_joint_speed(positions), SPEED_SMOOTHING_SIGMA) * motion.fps
-    time = np.arange(len(speed)) / motion.fps
-    dance_beats = motion_beats(positions)
+    per_frame = smoothed_speed(positions)
+    speed, time = per_frame * motion.fps, np.arange(len(per_frame)) / motion.fps
+    dance_beats = speed_minima(per_frame)
     axes.plot(time, speed, color="#3a6fd8", linewidth=1.4, label="mean joint speed (m/s)")
     axes.plot(dance_beats / motion.fps, speed[dance_beats], "o", color="#eb802a", markersize=4, label="motion beats")
     title = "motion beats"
