@@ -19,6 +19,7 @@ import numpy as np
 from common import write_song
 
 from choreo.finishing import beat_lock, finish, speed_limit
+from choreo.pipeline import Finishing
 from choreo.generator import GenerationRequest
 from choreo.metrics import beat_align_score, foot_contact_score, motion_beats
 from choreo.music import Music
@@ -57,7 +58,7 @@ def main() -> None:
         locked = beat_lock(raw, music.beat_frames)
         spent = time.perf_counter() - started
         started = time.perf_counter()
-        unstepped = finish(raw, music.beat_frames, footsteps=False)
+        unstepped = finish(raw, music.beat_frames, Finishing(footsteps=False))
         unstepped_spent = time.perf_counter() - started
         started = time.perf_counter()
         finished = finish(raw, music.beat_frames)

@@ -1,6 +1,6 @@
 """The quality, style-adherence, speed and memory report of both generators, in one command.
 
-    python benchmarks/report.py [--out docs/report.md] [--edge checkpoints/sgmd-edge-m2d.pt] [--quick]
+    python benchmarks/report.py [--out docs/report.md] [--edge generators/choreo_sgmd/weights/sgmd-edge-m2d.pt] [--quick]
 
 On the M2D test split (213 windows of 5 s, scored against the train split as the reference row):
 ground truth; a nearest-neighbour retrieval baseline (the train window whose music features are
@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from beat_lock import dance_outside_songs, m2d_dancers, markdown as beat_lock_table  # noqa: E402
 from common import REPO, cli_peak_rss, write_song  # noqa: E402
 
-EDGE_CHECKPOINT = REPO / "checkpoints" / "sgmd-edge-m2d.pt"
+EDGE_CHECKPOINT = REPO / "generators" / "choreo_sgmd" / "weights" / "sgmd-edge-m2d.pt"
 
 
 def retrieval_dances(train_windows, test_windows) -> list[Dance]:

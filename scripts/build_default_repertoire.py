@@ -21,7 +21,7 @@ from pathlib import Path
 
 from choreo import load_backend
 from choreo.datasets import TRAIN, load_dataset
-from choreo.finishing.steps import steps
+from choreo.finishing import footsteps
 from choreo.finishing.speed_limit import REAL_FLOOR_STEP, REAL_JOINT_SPEED, REFERENCE_FPS, speed_limit
 from choreo.generator import GenerationRequest
 from choreo.music import Music
@@ -48,7 +48,7 @@ def main() -> None:
             music = Music.from_file(clip.audio_path, start=clip.audio_offset, end=clip.audio_offset + clip.motion.duration)
             motion = speed_limit(sgmd.generate(GenerationRequest(music, style=genre, seed=0, options=SAMPLING)))
             if args.footsteps:
-                motion = steps(motion)
+                motion = footsteps(motion)
             dances.append((f"sgmd:{genre}:{clip.name}", motion, genre))
             print(f"danced {genre} to {clip.name}: {motion.duration:.1f} s", flush=True)
     repertoire = build_repertoire_file(dances, args.out, "bundled SGMD generations (M2D train songs)", stride=60,

@@ -33,7 +33,7 @@ import choreo
 import choreo.finishing
 from choreo.datasets import TEST, TRAIN, load_dataset, select_split
 from choreo.datasets.m2d import validation_clips
-from choreo.finishing import PaceConfig, RootPathConfig, StepConfig
+from choreo.finishing import FootstepsConfig, PaceConfig, RootPathConfig
 from choreo.metrics.beats import beat_align_score, motion_beats
 from choreo.metrics.fid import frechet_distance, motion_features, normalise_by_reference
 from choreo.metrics.protocol import SCORING_WINDOWS, scoring_windows
@@ -145,21 +145,16 @@ def report(paths: list[str]) -> None:
         print(f"\n{Path(path).stem} misses:", *target_failures(json.loads(Path(path).read_text())["songs"]), sep="\n  ")
 
 
-PASSES = {"steps": ("planted_steps", StepConfig), "pace": ("paced", PaceConfig),
-          "root_path": ("smooth_root_path", RootPathConfig)}
+CONFIGS = {"footsteps": FootstepsConfig, "pace": PaceConfig, "root_path": RootPathConfig}
 
 
-def override_pass_settings(pairs: list[str]) -> None:
-    """finish() calls each pass as pass(motion, fixed, config): here with these settings instead."""
+def pass_configs(pairs: list[str]) -> dict:
+    """{pass: its config} from PASS.FIELD=VALUE pairs (--settings footsteps.strength=0.8)."""
     by_pass: dict[str, dict] = {}
     for key, value in parse_pairs(pairs).items():
         name, _, field = key.partition(".")
         by_pass.setdefault(name, {})[field] = value
-    for name, fields in by_pass.items():
-        function_name, config_type = PASSES[name]
-        original, config = getattr(choreo.finishing, function_name), config_type(**fields)
-        setattr(choreo.finishing, function_name,
-                lambda motion, fixed, _, run=original, settings=config: run(motion, fixed, settings))
+    return {name: CONFIGS[name](**fields) for name, fields in by_pass.items()}
 
 
 def mean_rows(rows: list[dict]) -> dict:
@@ -177,7 +172,7 @@ def main() -> None:
     parser.add_argument("--option", nargs="*", default=[], help="backend options KEY=JSON, e.g. guidance=1.5")
     parser.add_argument("--finishing", nargs="*", default=[], help="Finishing fields KEY=JSON, e.g. footsteps=false")
     parser.add_argument("--settings", nargs="*", default=[],
-                        help="finishing passes' settings PASS.FIELD=JSON: steps.strength=0.8, pace.tolerance=0, "
+                        help="finishing passes' settings PASS.FIELD=JSON: footsteps.strength=0.8, pace.tolerance=0, "
                              "root_path.cutoff_hz=4")
     parser.add_argument("--songs", nargs="*", default=None, help="only these clips")
     parser.add_argument("--outside", nargs="*", default=[], help="also these songs from outside M2D, danced whole "
@@ -195,8 +190,8 @@ def main() -> None:
     reference = [motion_features(w.motion.joint_positions()) for w in reference_windows]
     reference = (np.stack([k for k, _ in reference]), np.stack([g for _, g in reference]))
     backend = choreo.load_backend(args.generator, args.checkpoint)
-    options, finishing = parse_pairs(args.option), replace(Finishing(), **parse_pairs(args.finishing))
-    override_pass_settings(args.settings)
+    options = parse_pairs(args.option)
+    finishing = replace(Finishing(), **parse_pairs(args.finishing), configs=pass_configs(args.settings))
     started = time.time()
     per_song, real, dances, real_dances, log = {}, {}, [], [], {}
     for clip in songs:

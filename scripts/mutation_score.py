@@ -47,44 +47,57 @@ PLUGINS = ("choreo_sgmd", "choreo_graph")
 
 AREAS: dict[str, Area] = {
     "metrics": Area(("src/choreo/metrics/*",),
-                    ("tests/test_metric_values.py", "tests/test_metrics.py", "tests/test_metric_edges.py",
-                     "tests/test_metric_survivors.py"),
+                    ("tests/metrics/test_beats.py", "tests/metrics/test_evaluate.py", "tests/metrics/test_fid.py",
+                     "tests/metrics/test_genre.py", "tests/metrics/test_geometric.py", "tests/metrics/test_kinetic.py",
+                     "tests/metrics/test_pfc.py", "tests/metrics/test_reference_loops.py", "tests/motion/test_beats.py"),
                     skip="not with_a_warning"),  # they check the warning names the caller's line: mutmut's trampoline is one frame more
-    "constraints": Area(("src/choreo/constraints/*",), ("tests/test_constraint_units.py", "tests/test_constraints.py"),
+    "constraints": Area(("src/choreo/constraints/*",),
+                        ("tests/constraints/test_displacement.py", "tests/constraints/test_mask.py",
+                         "tests/constraints/test_parse.py", "tests/constraints/test_constraints.py"),
                         skip="not masked_sampling and not root_path_is_followed and not controllable_commands"
                              " and not give_one_line and not generate_preview and not fuzz"),  # sampling, CLI, hypothesis
     "motion": Area(("src/choreo/motion/*",),
-                   ("tests/test_motion.py", "tests/test_augment.py", "tests/test_skeleton.py", "tests/test_motion_survivors.py",
-                    "tests/test_metric_values.py",
-                    "tests/test_metric_edges.py", "tests/test_sgmd_controls.py", "tests/test_graph.py"),
+                   ("tests/motion/test_motion.py", "tests/motion/test_augment.py", "tests/motion/test_beats.py",
+                    "tests/motion/test_contacts.py", "tests/motion/test_stitch.py", "tests/motion/test_vector.py",
+                    "tests/skeleton/test_rotations.py", "tests/skeleton/test_smpl.py", "tests/skeleton/test_kinematics.py",
+                    "tests/metrics/test_beats.py", "tests/metrics/test_fid.py", "tests/metrics/test_pfc.py",
+                    "tests/sgmd/test_controls.py", "tests/graph/test_generator.py"),
                    skip="not training and not cli and not checkpoints"),
     "formats": Area(("src/choreo/formats/*",),
-                    ("tests/test_formats.py", "tests/test_safe_arrays.py", "tests/test_forged_checkpoints.py", "tests/test_format_edges.py",
-                     "tests/test_gltf.py", "tests/test_rigs.py", "tests/test_fbx.py", "tests/test_format_survivors.py",
-                     "tests/test_gltf_fbx_survivors.py"),
-                    skip="not fuzz"),  # hypothesis: hundreds of examples per mutant
-    "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/test_spectrum.py",)),
+                    ("tests/formats/test_aistpp.py", "tests/formats/test_bvh.py", "tests/formats/test_fbx.py",
+                     "tests/formats/test_gltf.py", "tests/formats/test_json_format.py", "tests/formats/test_npy.py",
+                     "tests/formats/test_npz.py", "tests/formats/test_registry.py", "tests/formats/test_rigs.py",
+                     "tests/formats/test_safe_arrays.py", "tests/formats/test_safe_pickle.py",
+                     "tests/formats/test_smpl_params.py", "tests/sgmd/test_checkpoint.py"),
+                    skip="not fuzz"),  # hypothesis: hundreds of examples per mutant (and the fuzz_finding-marked tests)
+    "spectrum": Area(("src/choreo/music/spectrum.py",), ("tests/music/test_spectrum.py",)),
     "finishing": Area(("src/choreo/finishing/*",),
-                      ("tests/test_beat_lock.py", "tests/test_foot_lock.py", "tests/test_finishing_edges.py",
-                       "tests/test_finishing_survivors.py", "tests/test_speed_limit.py", "tests/test_speed_limit_units.py")),
+                      ("tests/finishing/test_beat_lock.py", "tests/finishing/test_foot_lock.py",
+                       "tests/finishing/test_speed_limit.py", "tests/finishing/test_footsteps.py",
+                       "tests/finishing/test_root_path.py", "tests/finishing/test_pace.py",
+                       "tests/finishing/test_finish.py")),
     "sgmd-sampling": Area(("src/choreo_sgmd/sampling.py", "src/choreo_sgmd/guidance.py", "src/choreo_sgmd/schedule.py"),
-                          ("tests/test_sgmd_sampling.py", "tests/test_sgmd_controls.py", "tests/test_sgmd.py"),
+                          ("tests/sgmd/test_sampling.py", "tests/sgmd/test_controls.py", "tests/sgmd/test_generator.py"),
                           skip="not training and not free_text and not batch and not generate_ and not inference"
                                " and not never_trained_on"),  # reads the bundled weights, which the clone moves
     "graph": Area(("src/choreo_graph/graph.py", "src/choreo_graph/warp.py", "src/choreo_graph/tempo.py"),
-                  ("tests/test_graph_units.py", "tests/test_graph_costs.py")),  # test_graph.py builds a repertoire: too slow per mutant
-    "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/test_speed_limit.py", "tests/test_speed_limit_units.py")),  # also in finishing; alone: minutes
+                  ("tests/graph/test_config.py", "tests/graph/test_graph.py", "tests/graph/test_tempo.py",
+                   "tests/graph/test_warp.py")),  # tests/graph/test_generator.py builds a repertoire: too slow per mutant
+    "speed-limit": Area(("src/choreo/finishing/speed_limit.py",), ("tests/finishing/test_speed_limit.py",)),  # also in finishing; alone: minutes
     "graph-guide": Area(("src/choreo_graph/guide.py", "src/choreo/constraints/displacement.py"),
-                        ("tests/test_graph_constraints.py", "tests/test_constraint_units.py", "tests/test_graph_guide_units.py")),
+                        ("tests/graph/test_constraints.py", "tests/graph/test_guide.py", "tests/constraints/test_displacement.py",
+                         "tests/constraints/test_mask.py", "tests/constraints/test_parse.py")),
     "beats": Area(("src/choreo/music/beats.py", "src/choreo/music/rhythm.py"),
-                  ("tests/test_beats.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_augment.py",
-                   "tests/test_beats_survivors.py")),
+                  ("tests/music/test_beats.py", "tests/music/test_rhythm.py", "tests/music/test_music.py",
+                   "tests/music/test_spectrum.py", "tests/motion/test_augment.py")),
     "music-features": Area(("src/choreo/music/chroma.py", "src/choreo/music/features.py", "src/choreo/music/music.py"),
-                           ("tests/test_chroma.py", "tests/test_music.py", "tests/test_spectrum.py", "tests/test_music_survivors.py"),
+                           ("tests/music/test_chroma.py", "tests/music/test_music.py", "tests/music/test_spectrum.py"),
                            clear_caches=("choreo.music.chroma",)),  # the constant-Q filter bank is cached
     "skeleton": Area(("src/choreo/skeleton/*",),
-                     ("tests/test_skeleton.py", "tests/test_ik.py", "tests/test_motion.py", "tests/test_motion_survivors.py",
-                      "tests/test_skeleton_survivors.py"),
+                     ("tests/skeleton/test_rotations.py", "tests/skeleton/test_smpl.py", "tests/skeleton/test_kinematics.py",
+                      "tests/datasets/test_ik.py", "tests/motion/test_motion.py", "tests/motion/test_augment.py",
+                      "tests/motion/test_beats.py", "tests/motion/test_contacts.py", "tests/motion/test_stitch.py",
+                      "tests/motion/test_vector.py"),
                      skip="not training and not cli and not checkpoints"),
 }
 
@@ -157,7 +170,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("areas", nargs="*", help=f"areas to mutate (default: all of {', '.join(AREAS)})")
     parser.add_argument("--seconds", type=int, default=3600, help="time limit per area")
-    parser.add_argument("--out", type=Path, default=Path("mutation-results.json"))
+    parser.add_argument("--out", type=Path, default=REPO / "runs" / "mutation-results.json")
     parser.add_argument("--list", action="store_true")
     args = parser.parse_args()
     if args.list:
@@ -180,6 +193,7 @@ def main() -> None:
               f"{'' if result['finished'] else ' (time limit: partial)'}  [{result['clone']}]", flush=True)
         for mutant in result["survived"]:
             print(f"  survived: {mutant}")
+        args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(results, indent=1))
     if shutil.which("git"):
         print(f"results: {args.out}")

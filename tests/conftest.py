@@ -1,8 +1,6 @@
 """Shared fixtures: a tiny SGMD checkpoint trained in seconds on synthetic windows."""
 
-import importlib.util
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -62,10 +60,12 @@ def wandering_dance(seed: int, frames: int = 40, fps: float = 30.0):
     return Motion.from_axis_angle(root, axis_angle, fps=fps, skeleton=skeleton)
 
 
-def load_script(path: Path):
-    """A benchmark script imported as a module (registered by name: its dataclasses look it up)."""
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[path.stem] = module
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture
+def source(tmp_path) -> Path:
+    """A small BVH to read (the tests of where outputs go: tests/test_fileio.py, tests/render/test_video.py)."""
+    from choreo.formats import write_motion
+    from tests.outputs import dance
+
+    path = tmp_path / "source.bvh"
+    write_motion(dance(), path)
+    return path

@@ -51,8 +51,62 @@ def test_constraints_built_from_the_music_are_kept(music, tiny_checkpoint):
     np.testing.assert_allclose(danced.joint_positions()[30], pose.joint_positions()[0], atol=1e-4)
 
 
-def test_backends_are_loaded_once_per_checkpoint(tiny_checkpoint):
-    assert load_backend("sgmd", tiny_checkpoint) is load_backend("sgmd", tiny_checkpoint)
+def test_a_backend_loads_once_and_dances_every_song(music, tiny_checkpoint):
+    from choreo.pipeline import Backend, DanceRequest
+
+    backend = Backend("sgmd", tiny_checkpoint)
+    request = DanceRequest(backend=backend, options={"steps": 2})
+    request.dance(music)
+    loaded = backend.loaded()
+    request.dance(music)
+    assert backend.loaded() is loaded
+    # and no process-wide cache keeps every model ever loaded alive
+    assert load_backend("sgmd", tiny_checkpoint) is not load_backend("sgmd", tiny_checkpoint)
+
+
+def test_every_way_a_backend_can_be_missing_is_one_error(monkeypatch, tmp_path):
+    from dataclasses import replace
+
+    import choreo.generator
+    from choreo.cli import main
+    from choreo.errors import ParameterError
+    from choreo.generator import GeneratorPlugin
+
+    real = choreo.generator.available_plugins()
+    plugins = {**real, "broken": GeneratorPlugin(name="broken", summary="", ready=False, status="no weights"),
+               "unweighted": replace(real["sgmd"], name="unweighted", default_checkpoint=tmp_path / "missing.pt")}
+    monkeypatch.setattr(choreo.generator, "available_plugins", lambda: plugins)
+    for name in ("nope", "broken", "unweighted"):
+        with pytest.raises(ParameterError, match=name):
+            choreo.dance(SONG, generator=name)
+        assert main(["generate", str(SONG), "-o", str(tmp_path / "d.bvh"), "--generator", name]) == 2
+        assert not (tmp_path / "d.bvh").exists()
+
+
+def test_a_request_is_checked_when_it_is_made_and_loads_nothing(tiny_checkpoint):
+    from choreo.errors import ParameterError
+    from choreo.pipeline import Backend, DanceRequest
+
+    backend = Backend("sgmd", tiny_checkpoint)
+    for bad in ({"guidance": 1e308}, {"nonsense": 1}, {"steps": 0}):
+        with pytest.raises(ParameterError):
+            DanceRequest(backend=backend, options=bad)
+    with pytest.raises(ParameterError, match="seed"):
+        DanceRequest(backend=backend, seed=2**40)
+    with pytest.raises(ParameterError, match="steps"):  # the bundled checkpoint's chain is known before it loads
+        DanceRequest(backend=Backend("sgmd"), options={"steps": 1001})
+    DanceRequest(backend=backend, options={"steps": 1001})  # another checkpoint's chain is checked once it loads
+    assert backend._loaded is None
+
+
+def test_settings_dataclasses_are_keyword_only():
+    from choreo.finishing import FootstepsConfig
+    from choreo_graph import GraphConfig
+    from choreo_sgmd import SamplingOptions
+
+    for settings in (Finishing, GraphConfig, SamplingOptions, FootstepsConfig):
+        with pytest.raises(TypeError):
+            settings(True)
 
 
 def test_unknown_backend_is_a_parameter_error(music):
@@ -133,7 +187,7 @@ def test_a_backend_that_listens_to_the_spectrum_gets_it_from_the_one_decode(monk
 
 
 def test_the_graph_dances_to_music_made_from_an_array():
-    from tests.test_music import click_track
+    from tests.music.helpers import click_track
 
     from choreo.music import SAMPLE_RATE
 
@@ -149,9 +203,8 @@ def test_the_song_is_analysed_before_the_backend_loads(monkeypatch, tiny_checkpo
     import choreo.pipeline
 
     order = []
-    monkeypatch.setattr(choreo.pipeline, "_BACKENDS", {})
-    load, analyse = choreo.pipeline.PendingBackend.result, Music.from_file
-    monkeypatch.setattr(choreo.pipeline.PendingBackend, "result", lambda self: order.append("load") or load(self))
+    load, analyse = choreo.pipeline.Backend.loaded, Music.from_file
+    monkeypatch.setattr(choreo.pipeline.Backend, "loaded", lambda self: order.append("load") or load(self))
     monkeypatch.setattr(Music, "from_file", lambda *a, **k: order.append("analyse") or analyse(*a, **k))
     motion = choreo.dance(SONG, checkpoint=tiny_checkpoint, options={"steps": 2})
     assert order == ["analyse", "load"] and motion.num_frames > 0
@@ -167,14 +220,14 @@ def test_what_a_plugin_says_it_reads_of_the_music_is_what_its_backend_reads():
 
 def test_an_error_while_loading_reaches_the_caller(tmp_path):
     from choreo.errors import InputError
-    from choreo.pipeline import PendingBackend
+    from choreo.pipeline import Backend
 
     damaged = tmp_path / "damaged.pt"
     damaged.write_bytes(b"not a checkpoint")
-    pending = PendingBackend("sgmd", damaged)  # not read yet
+    pending = Backend("sgmd", damaged)  # not read yet
     assert pending.reads_timbre and not pending.listens_to_spectrum  # known before the weights are read
     with pytest.raises(InputError, match="damaged.pt"):
-        pending.result()
+        pending.loaded()
     with pytest.raises(InputError, match="damaged.pt"):
         choreo.dance(SONG, checkpoint=damaged)
 

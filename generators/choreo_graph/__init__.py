@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
+from choreo.generator.options import forwarded
 from choreo.generator.registry import lazy_exports
 
 from .config import CLIP_FRAMES, GraphConfig, TrainOptions
@@ -54,11 +55,9 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
 
     if resume:
         raise ParameterError("graph training cannot resume (it keeps no optimiser state): start it again")
-    overrides = {"batch_size": options.batch_size, "seed": options.seed}
-    if options.steps is not None:
-        overrides |= {"style_steps": options.steps, "motion_tempo_steps": options.steps,
-                      "music_tempo_steps": options.steps}
-    config = replace(TrainConfig(), **{k: v for k, v in overrides.items() if v is not None})
+    stages = {} if options.steps is None else dict.fromkeys(("style_steps", "motion_tempo_steps", "music_tempo_steps"),
+                                                             options.steps)
+    config = replace(TrainConfig(), **forwarded(TrainConfig, options), **stages)
     clips = [c for c in load_dataset(data_dir, progress=load_progress) if c.audio_path]
     mels = clip_log_mels(clips)
     train = [c for c in clips if c.split in (TRAIN, None)]
@@ -110,6 +109,11 @@ def dataset_generator(clips, stride: int, source: str, checkpoint: str | Path | 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())
 
 
+def describe_run(meta: dict) -> str:
+    """'K = 512, repertoire repertoire-sgmd.npz': how a dance was assembled."""
+    return f"K = {meta.get('top_k')}, repertoire {meta.get('repertoire')}"
+
+
 _READY = DEFAULT_CHECKPOINT.is_file() and DEFAULT_REPERTOIRE.is_file()
 
 plugin = GeneratorPlugin(
@@ -125,4 +129,5 @@ plugin = GeneratorPlugin(
     constraints=True,
     listens_to_spectrum=True,
     reads_timbre=False,
+    describe=describe_run,
 )

@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
+from choreo.generator.options import option
+
 FPS = 30
 NODE_FRAMES = FPS  # a graph node is one second of motion
 WINDOW_FRAMES = 4 * FPS  # style and music tempo-density look at 4 s
@@ -56,29 +58,33 @@ GRAPH_BOUNDS = {"top_k": (1, math.inf), "dtw_stride": (1, math.inf), "blend_fram
                 "path_cost": (0, math.inf), "key_cost": (0, math.inf)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GraphConfig:
     """Selection, warping and the dynamic graph (paper 3.1-3.3)."""
 
-    top_k: int = 512  # candidates per 4 s music window (the paper's K)
+    top_k: int = option(512, "Candidate clips per 4 s of music (the paper's K).", "--top-k", "-k")
     style_cost: float = 1.0  # lambda_s in eq. 4
     completeness_cost: float = 1.0  # lambda_c
     transition_cost: float = 4.0  # lambda_t (per squared metre of mean joint distance)
     completeness_scale: float = 5.0  # frames: the sigmoid's width in eq. 6
     dtw_stride: int = 2  # warp on every 2nd frame (15 fps), then interpolate the path
     blend_frames: int = 6  # cross-fade length where the graph jumps between segments
-    warp_smoothing: float = 8.0  # sigma (frames) of the Gaussian that smooths each DTW warp (PFC 2.07 -> 1.00)
+    # sigma (frames) of the Gaussian that smooths each DTW warp: the raw warps slide the feet (docs/results.md, "ChoreoGraph")
+    warp_smoothing: float = option(8.0, "Sigma (frames) smoothing each clip's re-timing; 0 = the paper's raw DTW path "
+                                        "(feet slide more, motion beats recur more regularly).")
     # Each second's costs get noise of this x their spread, drawn from the seed: every seed of a free dance is a take, 0
     # too (under constraints seed 0 is the greedy walk: graph.DynamicGraph). 0 here is the paper's deterministic greedy
-    # walk, which plays the same few clips whatever the music, with a higher FID_g and more gliding feet than its takes
-    # (docs/results.md, "ChoreoGraph", "Every seed is a take").
-    take_variation: float = 0.1
+    # walk, which plays the same few clips whatever the music (docs/results.md, "ChoreoGraph", "Every seed is a take").
+    take_variation: float = option(0.1, "Noise, as a share of the costs' spread, that each second of the walk draws "
+                                        "from --seed; 0 = the paper's deterministic greedy walk.")
     repeat_cost: float = 100.0  # not in the paper: replaying source frames danced recently (see graph.py)
     repeat_memory: int = 30  # seconds a played node's source frames stay "recent"
     path_cost: float = 4.0  # under constraints: per squared metre between a node's root and the given root
     key_cost: float = 4.0  # under constraints: per squared metre of mean joint distance from a given pose
-    dynamic: bool = True  # False: the paper's Motion Graph ablation (first node of each segment only)
-    retempo: bool = True  # False: the "without re-tempo" ablation (middle 4 s, unwarped)
+    dynamic: bool = option(True, "The dynamic graph; --motion-graph: the paper's plain motion graph ablation (first "
+                                 "node of each segment only).", "--dynamic-graph/--motion-graph")
+    retempo: bool = option(True, "Re-time each clip onto the music; --no-retempo: the ablation using each clip's "
+                                 "middle 4 s unwarped.", "--retempo/--no-retempo")
 
     def __post_init__(self):
         from choreo.errors import ParameterError
@@ -89,13 +95,19 @@ class GraphConfig:
                 raise ParameterError(f"{name} must be {low:g} to {high:g}, got {str(value)[:24]}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrainOptions:
     """What `choreo train graph` takes; None keeps TrainConfig's default."""
 
-    steps: int | None = None  # of each of the three stages
-    batch_size: int | None = None
-    seed: int | None = None
+    steps: int | None = option(None, "Optimiser steps of each of the three stages.")
+    batch_size: int | None = option(None, "Excerpts per step.")
+    seed: int | None = option(None, "Seed of initialisation and batches.")
+
+    @staticmethod
+    def shown_defaults() -> dict:
+        """What each None stands for, as help shows it."""
+        config = TrainConfig()
+        return {"steps": config.style_steps, "batch_size": config.batch_size, "seed": config.seed}
 
 
 @dataclass(frozen=True)

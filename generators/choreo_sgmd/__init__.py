@@ -11,6 +11,8 @@ from pathlib import Path
 from choreo.generator import GeneratorPlugin
 from choreo.generator.registry import lazy_exports
 
+from choreo.generator.options import forwarded
+
 from .options import MUSIC_GUIDANCE, SamplingOptions, TrainOptions
 
 __all__ = [
@@ -23,7 +25,7 @@ __all__ = [
 
 # Loaded on first use (PEP 562), so `import choreo_sgmd` (every CLI start finds the plugin) stays torch-free.
 _LAZY = {
-    "train": ".training",  # train on prepared WindowTensors (benchmarks/fuzz_inputs.py: a tiny checkpoint in seconds)
+    "train": ".training",  # train on prepared WindowTensors (tests/fuzz/inputs.py: a tiny checkpoint in seconds)
     "Trainer": ".training",  # one optimiser step at a time (benchmarks/train_step.py: seconds per training step)
     "TrainConfig": ".config",  # what `train` and `Trainer` take: the training run's settings
     "DiffusionConfig": ".config",  # ... the noise schedule and loss
@@ -46,26 +48,17 @@ def train_from_dataset(data_dir: str | Path, out_dir: str | Path, options: Train
     from choreo.datasets import TEST, TRAIN, WindowConfig, load_dataset
     from choreo.music import FEATURE_DIM, RHYTHM_DIM
 
-    from .config import DiffusionConfig, TrainConfig, model_config
+    from .config import DiffusionConfig, ModelConfig, TrainConfig, model_config
     from .data import Augmentation, windows_to_tensors
     from .style import style_dim
     from .training import train
 
-    given = lambda pairs: {k: v for k, v in pairs.items() if v is not None}  # noqa: E731
-    train_config = replace(TrainConfig(prompt_kind=options.prompt), **given({
-        "max_steps": options.steps, "batch_size": options.batch_size, "seed": options.seed,
-        "checkpoint_every": options.checkpoint_every, "validation_every": options.checkpoint_every,
-        "mirror": options.mirror, "stretch": options.stretch, "turns": options.turns,
-        "genre_balance": options.genre_balance}))
-    model = model_config(options.config, style_dim=style_dim(options.prompt), **given({
-        "style_mode": options.style_mode, "style_init": options.style_init,
-        "music_dim": FEATURE_DIM + RHYTHM_DIM if options.rhythm else None}))
-    diffusion = DiffusionConfig(**given({"style_dropout": options.style_dropout, "prediction": options.prediction,
-                                         "snr_gamma": options.snr_gamma, "sigma_data": options.sigma_data,
-                                         "reconstruction_weight": options.reconstruction_weight,
-                                         "foot_weight": options.foot_weight, "contact_source": options.contact_source,
-                                         "stepping_weight": options.stepping_weight, "leg_weight": options.leg_weight,
-                                         "root_speed_weight": options.root_speed_weight}))
+    renamed = {"max_steps": options.steps, "validation_every": options.checkpoint_every}
+    train_config = replace(TrainConfig(prompt_kind=options.prompt), **forwarded(TrainConfig, options),
+                           **{name: value for name, value in renamed.items() if value is not None})
+    rhythm = {"music_dim": FEATURE_DIM + RHYTHM_DIM} if options.rhythm else {}
+    model = model_config(options.config, style_dim=style_dim(options.prompt), **forwarded(ModelConfig, options), **rhythm)
+    diffusion = DiffusionConfig(**forwarded(DiffusionConfig, options))
     clips = load_dataset(data_dir, progress=load_progress)
     train_clips = [c for c in clips if c.split in (TRAIN, None)]
     test_clips = [c for c in clips if c.split == TEST]
@@ -102,6 +95,13 @@ def build_generator(checkpoint: str | Path, **options):
 
 DEFAULT_CHECKPOINT = Path(__file__).parent / "weights" / "sgmd-cpu-m2d.pt"
 
+def describe_run(meta: dict) -> str:
+    """'ddim 10 steps, guidance 2, style guidance 2, seed 0': how a dance was sampled."""
+    styled = meta.get("style") and meta.get("style_guidance", 1.0) != 1.0
+    guidance = f"guidance {meta['guidance']:g}" + (f", style guidance {meta['style_guidance']:g}" if styled else "")
+    return f"{meta.get('sampler')} {meta.get('steps')} steps, {guidance}, seed {meta.get('seed')}"
+
+
 plugin = GeneratorPlugin(
     name="sgmd",
     summary="style-guided transformer motion diffusion (choreo generate)",
@@ -113,4 +113,5 @@ plugin = GeneratorPlugin(
     options=SamplingOptions,
     train_options=TrainOptions,
     constraints=True,
+    describe=describe_run,
 )

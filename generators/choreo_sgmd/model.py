@@ -154,9 +154,9 @@ class Denoiser(nn.Module):
     = (1 - a) / a its noise, c_skip = s^2 / (sigma^2 + s^2) and c_out = sigma s / sqrt(sigma^2 + s^2)
     for a data standard deviation s (Karras et al. 2022's preconditioning; s = 1 is Salimans and
     Ho's v-prediction, x0 = sqrt(a) x_t - sqrt(1 - a) v). Why: an x0 network trained on
-    40 minutes of dance learned to ignore x_t and t and to recall x0 from the music alone (at t = 50
-    its error was 5 x that of returning x_t itself, 0.0417 against 0.0083;
-    docs/history/results-2026-12-01-to-2026-12-04.md, "Why the dances are timid"). Here a nearly clean x_t
+    40 minutes of dance learned to ignore x_t and t and to recall x0 from the music alone (at small t
+    its error was larger than that of returning x_t itself; docs/results.md, "Why the dances are
+    timid"). Here a nearly clean x_t
     reaches the output through the skip whatever the network does.
     """
 

@@ -6,17 +6,18 @@ from dataclasses import dataclass, replace
 from typing import ClassVar
 
 from choreo.generator.base import check_seed
+from choreo.generator.options import forwarded, option
 from choreo.numbers import shown
 
 SAMPLERS = ("ddim", "ddpm")
-# With style guidance, music guidance on the low-noise 60 % of the chain only: as good, measured over three
-# seeds, and 26 network evaluations per window instead of 30 (docs/results.md, "Style guidance").
+# With style guidance, music guidance on the low-noise part of the chain only: as good, and fewer network
+# evaluations per window (docs/results.md, "Style guidance").
 STYLED_MUSIC_INTERVAL = (0.0, 0.6)
-# The style term lifts the genre recognised in free dances from 72 to 80 %, but under seed motion or
-# in-betweening it worsens FID_g and PFC in every seed measured: it pulls away from the given frames.
+# The style term makes a free dance's genre clearer, but under seed motion or in-betweening it pulls away
+# from the given frames (docs/results.md, "Style guidance").
 FREE_STYLE_GUIDANCE, CONSTRAINED_STYLE_GUIDANCE = 2.0, 1.0
-# Music guidance, chosen on whole songs: 2.5 (chosen on 5 s windows) rushes whole dances to 1.5 x the real
-# dancers' pace; 1.5 keeps it but loses kinetic realism (docs/results.md, "Whole songs").
+# Music guidance, chosen on whole songs: more rushes whole dances past the real dancers' pace, less loses
+# kinetic realism (docs/results.md, "Whole songs").
 MUSIC_GUIDANCE = 2.0
 # Guidance weights past this only amplify the network's error (at 1e308 the noise overflowed to NaN and
 # the whole dance was sampled before the NaN frames were refused); NaN and inf are refused with them.
@@ -26,11 +27,13 @@ MAX_GUIDANCE = 20.0
 MAX_STEPS, BUNDLED_TIMESTEPS = 100_000, 1000
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SamplingOptions:
-    steps: int = 10  # DDIM steps; docs/results.md has the quality-against-steps curve behind 10 (DDPM: 1000)
-    guidance: float = MUSIC_GUIDANCE  # classifier-free guidance weight w on music (paper eq. 6)
-    sampler: str = "ddim"
+    # DDIM steps (ddpm: the whole chain); docs/results.md, "Sampler and guidance", has the curve behind the default
+    steps: int = option(10, "Sampling steps (ddpm walks the checkpoint's whole chain).")
+    # classifier-free guidance weight w on the music (paper eq. 6)
+    guidance: float = option(MUSIC_GUIDANCE, "Classifier-free guidance weight on the music (1 = none).")
+    sampler: str = option("ddim", f"Sampler: {' or '.join(SAMPLERS)} (ddpm: the full chain, slow).")
     eta: float = 1.0  # DDIM stochasticity: 1 as EDGE samples, 0 deterministic
     seed: int = 0
     chunk_windows: int = 32  # windows per network call
@@ -40,7 +43,9 @@ class SamplingOptions:
     guidance_interval: tuple[float, float] | None = None
     # Guidance weight on the style (1: none, one evaluation fewer); None: FREE_STYLE_GUIDANCE for a free
     # dance, CONSTRAINED_STYLE_GUIDANCE under constraints (`resolved`; docs/results.md, "Style guidance").
-    style_guidance: float | None = None
+    style_guidance: float | None = option(
+        None, "Guidance weight on the --style prompt (1 = none).", "--style-guidance",
+        default_text=f"{FREE_STYLE_GUIDANCE:g}, or {CONSTRAINED_STYLE_GUIDANCE:g} where frames are given")
     style_guidance_interval: tuple[float, float] = (0.0, 1.0)  # noise levels t/T where style guidance applies
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
     bundled_timesteps: ClassVar[int] = BUNDLED_TIMESTEPS  # the CLI checks steps on it before the checkpoint loads
@@ -104,33 +109,49 @@ def _steps_inside(interval: tuple[float, float], timesteps: int) -> tuple[int, i
     return round(low * (timesteps - 1)), round(high * (timesteps - 1))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrainOptions:
     """What `choreo train sgmd` takes. None leaves the setting at its configuration's default
-    (config.py: TrainConfig, DiffusionConfig, the model preset), so each default lives there only."""
+    (config.py: TrainConfig, DiffusionConfig, the model preset), so each default lives there only;
+    a field of the same name as a configuration's is forwarded to it (``train_from_dataset``)."""
 
-    config: str = "cpu"  # model preset (config.PRESETS)
-    steps: int | None = None
-    batch_size: int | None = None
-    prompt: str = "description"  # style prompt kind
-    style_mode: str | None = None
-    style_init: str | None = None
-    style_dropout: float | None = None
-    checkpoint_every: int | None = None  # also the validation interval
-    seed: int | None = None
-    mirror: bool | None = None
-    stretch: tuple[float, ...] | None = None
-    turns: tuple[float, ...] | None = None
-    genre_balance: float | None = None
-    rhythm: bool | None = None  # True: beat phase and tempo channels beside the 35-d features
-    prediction: str | None = None
-    sigma_data: float | None = None
-    snr_gamma: float | None = None
-    reconstruction_weight: float | None = None  # the x0 term's weight (EDGE: 0.636), the one term on every rotation
-    foot_weight: float | None = None  # the foot term's weight (EDGE: 10.942)
-    contact_source: str | None = None  # contacts the foot term pins: "predicted" (EDGE) or "target" (the data's)
-    stepping_weight: float | None = None  # feet's world speeds against the data's (0: off)
-    leg_weight: float | None = None  # the legs' rotation channels' weight in the x0 term (1: as every channel)
-    root_speed_weight: float | None = None  # the root's horizontal speed against the data's (0: off)
-    init_from: str | None = None  # a training state to fine-tune from (same network)
-    hold_out_validation: bool = False  # M2D: train without the validation clips, validate on them
+    config: str = option("cpu", "Model configuration: a preset of config.PRESETS (cpu, cpu15, small, paper, tiny).")
+    steps: int | None = option(None, "Train until this many optimiser steps.")
+    batch_size: int | None = option(None, "Windows per step.")
+    prompt: str = option("description", "Style prompt kind: description, name or onehot.")
+    style_mode: str | None = option(None, "Style conditioning: modulation (the paper's), concat or none (EDGE).")
+    style_init: str | None = option(None, "The style FC's initial weights: random, or zero (starts as the no-style model).")
+    style_dropout: float | None = option(None, "Share of training windows shown without their style.")
+    checkpoint_every: int | None = option(None, "Steps between checkpoints and validations.")
+    seed: int | None = option(None, "Seed of initialisation, batches and noise.")
+    mirror: bool | None = option(None, "Also train on mirrored dances (docs/sgmd.md).", "--mirror/--no-mirror")
+    stretch: tuple[float, ...] | None = option(None, "Paces to also train at, the music stretched along, e.g. 0.85,1,1.18.")
+    turns: tuple[float, ...] | None = option(None, "Also train on every clip turned by these angles about the vertical, "
+                                                   "e.g. 0,90,180,270.")
+    genre_balance: float | None = option(None, "0 draws windows uniformly, 1 draws every genre equally.")
+    rhythm: bool | None = option(None, "Feed beat phase and tempo to the model.", "--rhythm/--no-rhythm")
+    prediction: str | None = option(None, "What the network predicts: x0 or v.")
+    sigma_data: float | None = option(None, "With --prediction v: the data's standard deviation the skip assumes.")
+    snr_gamma: float | None = option(None, "Weigh each window's loss by min(SNR, this) (min-SNR; 0: off).")
+    reconstruction_weight: float | None = option(None, "Weight of the x0 reconstruction loss.")
+    foot_weight: float | None = option(None, "Weight of the foot term: planted feet that move.")
+    contact_source: str | None = option(None, "Contacts the foot term pins: predicted (the model's own, EDGE) or "
+                                              "target (the data's).")
+    stepping_weight: float | None = option(None, "Weight of the feet's world speeds against the data's, in (m/s)^2.")
+    leg_weight: float | None = option(None, "Weight of the legs' rotation channels inside the x0 term.")
+    root_speed_weight: float | None = option(None, "Weight of the root's horizontal speed against the data's, "
+                                                   "direction-free, in (m/s)^2.")
+    init_from: str | None = option(None, "Fine-tune from this training state (same network; its step count carries on).",
+                                   existing_file=True)
+    hold_out_validation: bool = option(False, "On M2D: train without the validation clips (docs/m2d.md) and "
+                                              "validate on them.", "--hold-out-validation")
+
+    @staticmethod
+    def shown_defaults() -> dict:
+        """What each None stands for, as help shows it (imports the configurations)."""
+        from .config import DiffusionConfig, TrainConfig, model_config
+
+        train = TrainConfig()
+        configs = {**vars(train), **vars(DiffusionConfig()), **vars(model_config("cpu"))}
+        return {"steps": train.max_steps, "rhythm": False, **forwarded(TrainOptions, configs)}
+

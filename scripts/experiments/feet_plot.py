@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from choreo import load_backend  # noqa: E402
 from choreo.datasets import TEST, load_dataset  # noqa: E402
 from choreo.finishing import finish  # noqa: E402
+from choreo.pipeline import Finishing  # noqa: E402
 from choreo.metrics.protocol import generate_window_motions, music_beats, scoring_windows  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "m2d"
@@ -28,7 +29,7 @@ motions = generate_window_motions(load_backend("sgmd", sys.argv[2] if len(sys.ar
                                   options={"steps": 10})
 rows = {"real": [w.motion.joint_positions() for w in chosen]}
 for label, footsteps in (("SGMD, without footsteps", False), ("SGMD, as written (footsteps)", True)):
-    rows[label] = [finish(m, music_beats(w.features), footsteps=footsteps).joint_positions() for w, m in zip(chosen, motions)]
+    rows[label] = [finish(m, music_beats(w.features), Finishing(footsteps=footsteps)).joint_positions() for w, m in zip(chosen, motions)]
 fig, axes = plt.subplots(len(chosen), 3, figsize=(15, 3.2 * len(chosen)), sharey=False)
 for c, (name, dances) in enumerate(rows.items()):
     for r, p in enumerate(dances):

@@ -19,7 +19,8 @@ from pathlib import Path
 
 from choreo import load_backend
 from choreo.datasets import load_dataset
-from choreo.finishing import StepConfig, finish
+from choreo.finishing import FootstepsConfig, finish
+from choreo.pipeline import Finishing
 from choreo.metrics.evaluate import Dance
 from choreo.datasets import TEST, select_split
 from choreo.metrics.protocol import (TABLE_HEADER, ScoringSet, generate_window_motions, music_beats, score, table_row,
@@ -54,12 +55,12 @@ def main() -> None:
               + f" <!-- {pace_and_feet_by_genre([d.positions for d in as_dances], real, genres, 30.0)} -->", flush=True)
 
     print(TABLE_HEADER.format(label="setting"))
-    row("none (finished)", [finish(m, music_beats(w.features), footsteps=False) for w, m in zip(scoring.windows, motions)])
+    row("none (finished)", [finish(m, music_beats(w.features), Finishing(footsteps=False)) for w, m in zip(scoring.windows, motions)])
     for setting in args.settings:
         trigger, swing, lift, strength = map(float, setting.split(":"))
-        config = StepConfig(trigger=trigger, swing_seconds=swing, lift=lift, strength=strength)
+        config = FootstepsConfig(trigger=trigger, swing_seconds=swing, lift=lift, strength=strength)
         started = time.perf_counter()
-        stepped = [finish(m, music_beats(w.features), step_config=config) for w, m in zip(scoring.windows, motions)]
+        stepped = [finish(m, music_beats(w.features), Finishing(configs={"footsteps": config})) for w, m in zip(scoring.windows, motions)]
         row(f"{setting} ({time.perf_counter() - started:.1f} s)", stepped)
 
 

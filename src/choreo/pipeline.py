@@ -1,122 +1,189 @@
-"""A song in, a finished dance out: the pipeline every command, script and benchmark shares.
+"""A song in, a finished dance out: the one road every command, script and benchmark takes.
 
     import choreo
     motion = choreo.dance("song.mp3", style="waltz", seed=3)
     motion = choreo.dance("song.mp3", generator="graph", options={"top_k": 128})
 
-Steps: analyse the song (or take a :class:`~choreo.music.Music`), build the constraints against
-its frames, let the backend dance, then the finishing passes (beat lock on, foot lock off, as
-measured in docs/results.md). Writing files is the caller's business (``choreo.formats``).
-The beats are the tracker's unless the caller knows them: ``bpm=128`` or ``beats="beats.csv"``
-(choreo.music.beat_source); the dance's metadata says which (``"beats"``).
+A :class:`DanceRequest` is everything but the song, checked when it is made, before any song is
+read. Its :meth:`~DanceRequest.dance` analyses a song, builds the constraints against its frames,
+lets the backend dance and finishes the dance (:class:`Finishing`, choreo.finishing). The dancing
+commands build one request and dance every song with it; ``choreo.dance`` builds one per call.
+Writing files is the caller's business (``choreo.formats``). The beats are the tracker's unless
+the caller knows them (``bpm=128``, ``beats="beats.csv"``; choreo.music.beat_source); the dance's
+metadata says which (``"beats"``).
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Union
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Union
+
+from .errors import ParameterError
+from .generator.base import check_seed
+from .generator.options import option
 
 if TYPE_CHECKING:
     from .constraints import Constraints
-    from .generator import Generator
+    from .generator import Generator, GeneratorPlugin
     from .motion import Motion
-    from .music import Music
+    from .music import BeatSource, Music
 
 ConstraintsFor = Callable[["Music"], "Constraints | None"]  # built once the song's frames are known
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Finishing:
-    """The passes every dance goes through after its backend (choreo.finishing)."""
+    """The passes every dance goes through after its backend (choreo.finishing.finish runs them;
+    why each is on or off by default: docs/results.md, "Finishing passes")."""
 
-    beat_lock: bool = True  # motion beats re-timed onto the music's beats (given frames stay)
-    foot_lock: bool = False  # planted feet's drift moved onto the root (halves PFC, doubles FID_g)
-    speed_limit: bool = True  # turns and dashes faster than real dancers' spread over neighbouring frames
-    footsteps: bool = True  # feet stand until the body leaves them, then step (legs by IK; docs/results.md, "Feet")
-    root_path: bool = True  # the root's travel low-passed, its wobble removed (choreo.finishing.root_path)
-    pace: bool = True  # a free dance's travel brought toward its genre's real pace (choreo.finishing.pace)
-
-
-_BACKENDS: dict[tuple, "Generator"] = {}
-
-
-def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options) -> "Generator":
-    """The backend ``name`` loaded from ``checkpoint`` (default: its bundled one), kept for reuse:
-    a script dancing many songs loads the weights once."""
-    return PendingBackend(name, checkpoint, **factory_options).result()
+    speed_limit: bool = option(True, "Spread turns and dashes faster than real dancers move over the frames around them.")
+    root_path: bool = option(True, "Smooth the root's travel on the floor, removing its wobble (given frames stay).")
+    pace: bool = option(True, "Bring a whole song's travel toward the real pace of its genre (short dances keep theirs).")
+    footsteps: bool = option(True, "Plan steps: each foot stands until the body leaves it, then steps (legs by IK).")
+    beat_lock: bool = option(True, "Re-time the dance so its motion beats land on the music's beats (given frames stay).")
+    foot_lock: bool = option(False, "Let planted feet carry the body instead of sliding (docs/results.md, \"Feet\").")
+    # A pass's settings by its name, e.g. {"footsteps": FootstepsConfig(strength=0.8)}; absent: its defaults.
+    configs: Mapping[str, Any] = field(default_factory=dict)
 
 
-class PendingBackend:
-    """A backend checked now and loaded when first needed: after the song is analysed, so a song
-    that cannot be read fails before torch is imported. What the backend reads of the music comes
-    from its plugin, so the analysis does not wait for the weights. An unknown backend or a
-    missing bundled checkpoint is refused at once. (Loading on a thread during the analysis saved
-    2-5 % of a `choreo generate`, measured on 2026-12-04: removed, docs/results.md.)
-    """
+class Backend:
+    """A backend checked now and loaded when first used: after the song is analysed, so a song
+    that cannot be read fails before torch is imported. What it reads of the music comes from its
+    plugin, so the analysis does not wait for the weights. Loaded once, kept by this object (a
+    batch dances every song with one load)."""
 
-    def __init__(self, name: str, checkpoint: str | os.PathLike | None = None, **factory_options):
-        self.name, self.plugin = name, _available_plugin(name)
+    def __init__(self, name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options):
+        self.name, self.plugin = name, available_plugin(name)
         if checkpoint is None:
             checkpoint = self.plugin.default_checkpoint
             if checkpoint is None or not Path(checkpoint).is_file():
-                from .errors import ChoreoError
+                raise ParameterError(f"generator {name!r} has no bundled checkpoint; pass a checkpoint")
+        self.checkpoint, self.bundled = checkpoint, checkpoint == self.plugin.default_checkpoint
+        self._factory_options, self._loaded = factory_options, None
 
-                raise ChoreoError(f"{name} has no bundled checkpoint; pass a checkpoint")
-        self._checkpoint, self._options = checkpoint, factory_options
-        self._key = (name, str(checkpoint), tuple(sorted((k, str(v)) for k, v in factory_options.items())))
+    @classmethod
+    def holding(cls, generator: "Generator") -> "Backend":
+        """A backend already loaded (built by hand or by :func:`load_backend`)."""
+        from .generator import available_plugins
+
+        backend = cls.__new__(cls)
+        backend.name, backend.plugin, backend._loaded = generator.name, available_plugins().get(generator.name), generator
+        backend.checkpoint, backend.bundled, backend._factory_options = None, False, {}
+        return backend
 
     @property
     def listens_to_spectrum(self) -> bool:
-        return self.plugin.listens_to_spectrum
+        return self._loaded.listens_to_spectrum if self._loaded is not None else self.plugin.listens_to_spectrum
 
     @property
     def reads_timbre(self) -> bool:
-        return self.plugin.reads_timbre
+        return self._loaded.reads_timbre if self._loaded is not None else self.plugin.reads_timbre
 
-    def result(self) -> "Generator":
+    def loaded(self) -> "Generator":
         """The loaded backend (loaded now if no earlier call has)."""
-        if self._key not in _BACKENDS:
-            _BACKENDS[self._key] = self.plugin.factory(self._checkpoint, **self._options)
-        return _BACKENDS[self._key]
+        if self._loaded is None:
+            self._loaded = self.plugin.factory(self.checkpoint, **self._factory_options)
+        return self._loaded
 
 
-def _available_plugin(name: str):
-    from .errors import ChoreoError, ParameterError
+def available_plugin(name: str) -> "GeneratorPlugin":
+    """The plugin ``name``, able to generate; one error (exit 2) for each way it can be missing."""
     from .generator import available_plugins
 
     plugin = available_plugins().get(name)
     if plugin is None:
         raise ParameterError(f"generator {name!r} is not available (see choreo generators)")
     if plugin.factory is None:
-        raise ChoreoError(f"generator {name!r} is not available: {plugin.status or 'it cannot generate'}")
+        raise ParameterError(f"generator {name!r} is not available: {plugin.status or 'it cannot generate'}")
     return plugin
 
 
-def check_request(backend: str, options: dict[str, Any], constrained: bool) -> None:
-    """Refuse, before any work, options the backend does not have and constraints it cannot keep."""
-    from .errors import ParameterError
-    from .generator import available_plugins
+def load_backend(name: str = "sgmd", checkpoint: str | os.PathLike | None = None, **factory_options) -> "Generator":
+    """The backend ``name`` loaded from ``checkpoint`` (default: its bundled one). Keep it and pass
+    it to :func:`dance` to dance many songs with one load."""
+    return Backend(name, checkpoint, **factory_options).loaded()
+
+
+@dataclass(frozen=True, kw_only=True)
+class DanceRequest:
+    """Everything about a dance but the song, checked when made: options the backend does not
+    have or refuses, steps the bundled checkpoint's chain cannot take, constraints the backend
+    cannot keep, a seed out of range."""
+
+    backend: Backend
+    style: str | None = None  # a genre, free text or a schedule (the backend reads it)
+    seed: int = 0
+    options: Mapping[str, Any] = field(default_factory=dict)  # the backend's own; absent ones: its defaults
+    finishing: Finishing = Finishing()
+    beats: "BeatSource | None" = None  # None: choreo's tracker
+    threads: int | None = None  # torch threads; None: what other work leaves idle (choreo.threads)
+    constrained: bool = False  # whether constraints will come (keys, seed motion, inpainting, a path)
+
+    def __post_init__(self):
+        check_seed(self.seed)
+        plugin, name = self.backend.plugin, self.backend.name
+        if plugin is None:
+            return  # a backend object built by hand: it checks its own request
+        if self.constrained and not plugin.constraints:
+            raise ParameterError(f"the {name} backend does not take constraints (keys, seed motion, inpainting, "
+                                 "a path); use sgmd")
+        if plugin.options is not None and self.options:
+            check_options(name, plugin.options, self.options, self.backend.bundled)
+
+    def analyse(self, song: str | os.PathLike, progress: Callable[[float, float], None] | None = None) -> "Music":
+        """The song analysed as this request's backend reads it (one decode), with its beats."""
+        from .music import BeatSource, Music
+
+        return Music.from_file(song, progress=progress, log_mel=self.backend.listens_to_spectrum,
+                               timbre=self.backend.reads_timbre, beats=self.beats or BeatSource())
+
+    def dance(self, song: Union[str, os.PathLike, "Music"], constraints: Union["Constraints", ConstraintsFor, None] = None,
+              analysis_progress: Callable[[float, float], None] | None = None,
+              progress: Callable[[float], None] | None = None) -> "Motion":
+        """Dance to ``song`` (an audio file, or its :meth:`analyse`). ``constraints`` (or a
+        function building them from the analysed music) fix frames, joints or a root path;
+        ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps."""
+        from .finishing import finish
+        from .generator import GenerationRequest
+        from .music import Music
+        from .threads import use_threads
+
+        music = song if isinstance(song, Music) else self.analyse(song, analysis_progress)
+        backend = self.backend.loaded()
+        fixed = constraints(music) if callable(constraints) else constraints
+        request = GenerationRequest(music, style=self.style, seed=self.seed, options=dict(self.options), constraints=fixed)
+        use_threads(self.threads)  # chosen now, beside whatever else runs now
+        # The backend's dance goes straight into finish, which lets go of it after the first pass: an
+        # hour's raw dance kept here beside the finished one would add to the peak memory.
+        finished = finish(backend.generate(request, progress=progress), music.beat_frames, self.finishing, fixed)
+        finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
+        return finished
+
+
+def check_options(backend: str, options_type: type, given: Mapping[str, Any], bundled: bool) -> None:
+    """Refuse options ``options_type`` does not have or refuses; on the bundled checkpoint, also
+    steps its noise chain cannot take (an options type with ``bundled_timesteps`` and ``on_chain``),
+    so that they fail now rather than after the song's analysis."""
     from .generator.options import parse_options
 
-    plugin = available_plugins().get(backend)
-    if plugin is None:
-        return  # a backend object built by hand: it checks its own request
-    if plugin.options is not None:
-        parse_options(backend, plugin.options, options)
-    if constrained and not plugin.constraints:
-        raise ParameterError(f"the {backend} backend does not take constraints (keys, seed motion, inpainting, a path);"
-                             " use sgmd")
+    chosen = parse_options(backend, options_type, given)
+    chain = getattr(chosen, "bundled_timesteps", None)
+    if bundled and chain is not None:
+        try:
+            chosen.on_chain(chain, "steps" in given)  # --steps 1001, or ddpm with --steps 10
+        except ValueError as error:
+            raise ParameterError(f"{backend}: {error}") from None
 
 
 def dance(
     song: Union[str, os.PathLike, "Music"],
-    generator: Union[str, "Generator", PendingBackend] = "sgmd",
+    generator: Union[str, "Generator", Backend] = "sgmd",
     *,
     style: str | None = None,
     seed: int = 0,
-    options: dict[str, Any] | None = None,
+    options: Mapping[str, Any] | None = None,
     constraints: Union["Constraints", ConstraintsFor, None] = None,
     checkpoint: str | os.PathLike | None = None,
     finishing: Finishing = Finishing(),
@@ -129,46 +196,24 @@ def dance(
 ) -> "Motion":
     """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
 
-    ``generator`` is a backend name (see `choreo generators`; it loads while the song is analysed),
-    a :class:`PendingBackend` or a loaded backend; ``options`` are that backend's own (sgmd:
-    steps, guidance, sampler; graph: top_k, ...); ``constraints``
-    (or a function building them from the analysed music) fix frames, joints or a root path.
-    ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps.
-    ``bpm`` (the tempo; the phase is still tracked) or ``beats`` (a file of beat times, see
-    choreo.music.beat_file) replace the tracked beats everywhere: features, beat lock, backend;
-    ``beat_tracker="madmom"`` has madmom's trained tracker hear them (the madmom extra; its models
-    are CC BY-NC-SA 4.0, non-commercial).
-    ``threads``: torch threads for the dance (default: the CPUs other work leaves idle, choreo.threads).
+    ``generator`` is a backend name (see `choreo generators`; loaded from ``checkpoint`` once the
+    song is analysed), a :class:`Backend` or a loaded backend (:func:`load_backend`); ``options``
+    are that backend's own (sgmd: steps, guidance, sampler; graph: top_k, ...). ``bpm`` (the tempo;
+    the phase is still tracked) or ``beats`` (a file of beat times, see choreo.music.beat_file)
+    replace the tracked beats everywhere: features, beat lock, backend; ``beat_tracker="madmom"``
+    has madmom's trained tracker hear them (the madmom extra; its models are CC BY-NC-SA 4.0,
+    non-commercial). The rest: :class:`DanceRequest` and its ``dance``.
     """
-    from .errors import ParameterError
-    from .finishing import PaceConfig, RootPathConfig, finish
-    from .finishing.steps import TURNED_JOINTS
-    from .generator import GenerationRequest
-    from .threads import use_threads
     from .music import BeatSource, Music
 
-    check_request(generator if isinstance(generator, str) else generator.name, options or {},
-                  constraints is not None)  # before any work
-    beat_source = BeatSource.from_options(bpm, beats, beat_tracker)
-    if isinstance(song, Music) and (bpm is not None or beats is not None or beat_tracker != "choreo"):
+    if isinstance(generator, str):
+        backend = Backend(generator, checkpoint)
+    else:
+        backend = generator if isinstance(generator, Backend) else Backend.holding(generator)
+    given_beats = bpm is not None or beats is not None or beat_tracker != "choreo"
+    if given_beats and isinstance(song, Music):
         raise ParameterError("the music is already analysed: give its beats to Music.from_file instead")
-    backend = PendingBackend(generator, checkpoint) if isinstance(generator, str) else generator
-    music = song if isinstance(song, Music) else Music.from_file(song, progress=analysis_progress,
-                                                                  log_mel=backend.listens_to_spectrum,
-                                                                  timbre=backend.reads_timbre, beats=beat_source)
-    if isinstance(backend, PendingBackend):
-        backend = backend.result()
-    fixed = constraints(music) if callable(constraints) else constraints
-    request = GenerationRequest(music, style=style, seed=seed, options=dict(options or {}), constraints=fixed)
-    use_threads(threads)  # chosen now, beside whatever else runs now
-    frames = None if fixed is None else fixed.fixed_frames()
-    legs = None if fixed is None else fixed.frames_fixing(TURNED_JOINTS)
-    # The backend's dance goes straight into finish, which lets go of it after the first pass: an
-    # hour's raw dance kept here beside the finished one would add to the peak memory.
-    finished = finish(backend.generate(request, progress=progress), music.beat_frames, frames,
-                      beat=finishing.beat_lock, foot=finishing.foot_lock, speed=finishing.speed_limit,
-                      footsteps=finishing.footsteps, legs_fixed=legs,
-                      root_path=RootPathConfig() if finishing.root_path else None,
-                      pace=PaceConfig() if finishing.pace else None)
-    finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
-    return finished
+    request = DanceRequest(backend=backend, style=style, seed=seed, options=dict(options or {}), finishing=finishing,
+                           beats=BeatSource.from_options(bpm, beats, beat_tracker) if given_beats else None,
+                           threads=threads, constrained=constraints is not None)
+    return request.dance(song, constraints, analysis_progress, progress)

@@ -2,7 +2,8 @@
 
 torch's default is one thread per core of the machine. Beside other jobs (``xargs -P``, GNU
 parallel, a CI matrix on one runner) its threads then spin against each other's: two `choreo
-generate` at once on two cores sampled 8 x slower than one alone. So before each dance the
+generate` at once on two cores sampled several times slower than one alone (docs/results.md,
+"Jobs side by side"). So before each dance the
 count is chosen again from what is true now: the CPUs this process may run on (its affinity
 mask and its cgroup's CPU quota) less the tasks other processes have running at this moment
 (the kernel's instantaneous count in /proc/loadavg). ``--threads N`` and ``OMP_NUM_THREADS``

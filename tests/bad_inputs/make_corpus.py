@@ -1,4 +1,4 @@
-"""Write the corpus of bad inputs that tests/test_bad_inputs.py feeds to the CLI.
+"""Write the corpus of bad inputs that tests/cli/test_bad_inputs.py feeds to the CLI.
 
 Small, deterministic files, committed; rerun from the repository root to regenerate them:
     python tests/bad_inputs/make_corpus.py

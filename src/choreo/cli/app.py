@@ -9,7 +9,7 @@ from .eval_command import evaluate
 from .generate_command import generate, inbetween, inpaint, trajectory
 from .graph_command import graph_app
 from .render_command import render
-from .train_command import train
+from .train_command import train_app
 
 app = typer.Typer(
     name="choreo",
@@ -30,6 +30,6 @@ app.command("convert")(commands.convert)
 app.command("generators")(commands.generators)
 app.command("prepare")(commands.prepare)
 app.command("eval")(evaluate)
-app.command("train")(train)
+app.add_typer(train_app, name="train")
 app.command("render")(render)
 app.add_typer(graph_app, name="graph")

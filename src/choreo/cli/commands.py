@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from .generate_command import BEAT_TRACKER, BEATS, BPM, beat_source
+from .dancing import BEAT_TRACKER, BEATS, BPM
 from .numbers import Number
 from .progress import progress_bar, stderr_console, stdout_console
 from .text import markup
@@ -49,7 +49,10 @@ def info(
     is_song = path.suffix.lower() in AUDIO_EXTENSIONS
     if not is_song and (bpm is not None or beats is not None or beat_tracker != "choreo"):
         raise ParameterError("--bpm, --beats and --beat-tracker describe a song, not a motion file")
-    source = beat_source(bpm, beats, beat_tracker) if is_song else None
+    if is_song:
+        from ..music import BeatSource
+
+        source = BeatSource.from_options(bpm, beats, beat_tracker)
     from rich.table import Table
 
     table = Table(show_header=False, box=None)

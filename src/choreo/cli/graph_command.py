@@ -8,9 +8,7 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .generate_command import (BEAT_LOCK, BEAT_TRACKER, BEATS, BPM, CHECKPOINT, FOOT_LOCK, FOOTSTEPS, OUTPUT, RIG, SEED, SONG, SPEED_LIMIT, THREADS,
-                               Settings, beat_source, dance_one, load_backend)
-from .numbers import Number
+from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, Outputs, dance_one, dancing_command
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -32,26 +30,17 @@ graph_app = typer.Typer(
 
 
 @graph_app.command("dance")
+@dancing_command("graph", choose_generator=False)
 def graph_dance(
     song: Path = SONG, output: List[str] = OUTPUT,
     repertoire: Optional[Path] = typer.Option(None, help="Repertoire from choreo graph build (default: the bundled one)."),
-    checkpoint: Optional[Path] = CHECKPOINT,
-    style: Optional[str] = typer.Option(None, help="Only use repertoire clips of this genre (default: chosen by the music)."),
-    top_k: int = typer.Option(512, "--top-k", "-k", help="Candidate clips per 4 s of music (the paper's K)."),
-    motion_graph: bool = typer.Option(False, "--motion-graph", help="Ablation: a plain motion graph (first node of each segment only)."),
-    no_retempo: bool = typer.Option(False, "--no-retempo", help="Ablation: use each clip's middle 4 s unwarped."),
-    warp_smoothing: Optional[float] = typer.Option(None, parser=Number("--warp-smoothing"), help="Sigma (frames) smoothing each clip's re-timing (default 8); "
-                                                   "0 = the paper's raw DTW path: feet slide twice as much, motion beats recur more regularly."),
-    take_variation: Optional[float] = typer.Option(None, parser=Number("--take-variation"), help="Noise, as a share of the costs' spread, that each second of the walk "
-                                                   "draws from --seed (default 0.1); 0 = the paper's deterministic greedy walk."),
-    seed: int = typer.Option(0, parser=SEED.parser, help="Which take of the song: each seed is another walk through the repertoire."),
-    format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
-    preview: bool = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 with the music."),
-    beat_lock: bool = BEAT_LOCK, foot_lock: bool = FOOT_LOCK, speed_limit: bool = SPEED_LIMIT, footsteps: bool = FOOTSTEPS,
-    rig: Optional[str] = RIG, bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
-    threads: Optional[int] = THREADS,
+    preview: bool = PREVIEW,
+    dance: DanceFlags = None,
 ) -> None:
     """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
+
+    --style only uses repertoire clips of that genre (default: chosen by the music); each --seed is
+    another take, another walk through the repertoire.
 
     Examples:
       choreo graph song.mp3 -o dance.bvh
@@ -59,16 +48,8 @@ def graph_dance(
       choreo graph song.mp3 -o dance.npz --style waltz --preview
       choreo graph song.mp3 -o dance.bvh --warp-smoothing 0      # the paper's raw warps
     """
-    from choreo_graph.config import GraphConfig
-
-    graph_options = {key: value for key, value in (("warp_smoothing", warp_smoothing), ("take_variation", take_variation))
-                     if value is not None}
-    GraphConfig(top_k=top_k, **graph_options)  # checked now, not after the song's analysis
-    settings = Settings(style, checkpoint, "graph", None, None, None, seed, format, preview, beat_lock, foot_lock, rig,
-                        speed_limit, beats=beat_source(bpm, beats, beat_tracker), threads=threads, footsteps=footsteps)
-    backend = load_backend(settings, repertoire=repertoire, top_k=top_k, dynamic=not motion_graph, retempo=not no_retempo,
-                           **graph_options)
-    dance_one(backend, song, output, settings)
+    request = dance.request(repertoire=repertoire)
+    dance_one(request, song, Outputs(paths=output, format=dance.format, rig=dance.rig, preview=preview))
 
 
 @graph_app.command("build")
@@ -81,7 +62,7 @@ def graph_build(
     stride: float = typer.Option(2.0, help="Seconds between the starts of consecutive 8 s clips."),
     max_speed: Optional[float] = typer.Option(None, help="Leave out clips where a joint ever moves faster (m/s): glitches."),
     max_root_speed: Optional[float] = typer.Option(None, help="Leave out clips where the root ever moves faster (m/s)."),
-    checkpoint: Optional[Path] = CHECKPOINT,
+    checkpoint: Optional[Path] = typer.Option(None, help="The models that describe the clips (default: the bundled ones)."),
 ) -> None:
     """Build a repertoire: every 8 s clip of a dataset split or of given motions, described by the models.
 

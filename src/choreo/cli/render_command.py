@@ -22,7 +22,7 @@ def render(
     music: Optional[Path] = typer.Option(None, help="Song to mux into the video (and whose beats --plot beats draws)."),
     plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats) or 'path' (root from above)."),
     size: str = typer.Option("640x480", help="Frame size WIDTHxHEIGHT in pixels."),
-    fps: Optional[float] = typer.Option(None, parser=Number("--fps", 1, 120), help="Frame rate of the preview (default: the motion's; GIF at most 15)."),
+    fps: Optional[float] = typer.Option(None, parser=Number("--fps", 1, 120), help="Frame rate of the preview (default: the motion's; a GIF's is capped: GIF frame delays are coarse)."),
     strip: int = typer.Option(6, help="PNG: how many moments side by side (1: the middle frame)."),
 ) -> None:
     """Render a motion: a shaded 3D figure the camera follows, with the music; or a beats/path plot.

@@ -1,47 +1,62 @@
 """Passes every generated dance goes through after its backend: speed limit (no joint faster
-than real dancers move), beat lock (re-timing onto the music's beats), footsteps (feet that stand
-and step instead of gliding), and, when asked, foot lock (planted feet carry the body)."""
+than real dancers move), root path (travel without wobble), pace (a whole song's travel at its
+genre's pace), footsteps (feet that stand and step instead of gliding), beat lock (re-timing onto
+the music's beats) and, when asked, foot lock (planted feet carry the body). Each pass has a
+module, a function and a config of one name; ``choreo.pipeline.Finishing`` turns them on and off."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..motion import Motion
 from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
 from .foot_lock import FootLockConfig, foot_lock
-from .pace import PaceConfig, paced
-from .root_path import RootPathConfig, smooth_root_path
+from .footsteps import FootstepsConfig, footsteps
+from .pace import PaceConfig, pace
+from .root_path import RootPathConfig, root_path
 from .speed_limit import SpeedLimitConfig, speed_limit
-from .steps import StepConfig, steps as planted_steps
+
+if TYPE_CHECKING:
+    from ..constraints import Constraints
+    from ..pipeline import Finishing
 
 
-def finish(motion: Motion, music_beat_frames: np.ndarray, fixed: np.ndarray | None = None, *,
-           beat: bool = True, foot: bool = False, speed: bool = True, footsteps: bool = True,
-           legs_fixed: np.ndarray | None = None, step_config: StepConfig = StepConfig(),
-           root_path: RootPathConfig | None = RootPathConfig(), pace: PaceConfig | None = PaceConfig()) -> Motion:
-    """The passes as `choreo generate` applies them by default: speed limit, footsteps, beat lock (and,
-    when asked, foot lock, which halves PFC but doubles FID_g: docs/results.md); ``fixed`` frames stay.
-    The speed limit goes first, so that a glitch is not taken for a motion beat, and last, since
-    re-timing speeds stretches up by as much as 1.33 x. Footsteps come before the beat lock: they
-    move the motion beats (a leg's swing is part of the body's speed), and a re-timing keeps a
-    standing foot standing; after it they cost the beat-rate lock 5-9 points (docs/results.md, "Feet").
-    Footsteps turn only the legs, so they keep the frames in ``legs_fixed`` (where a leg rotation
-    was given; default ``fixed``), not every given frame. ``step_config``: the step planner's
-    settings (scripts/experiments/footsteps_settings.py compares them)."""
-    if speed:
-        motion = speed_limit(motion, fixed)
-    if root_path is not None:
-        motion = smooth_root_path(motion, fixed, root_path)
-    if pace is not None:
-        motion = paced(motion, fixed, pace)
-    if footsteps:
-        motion = planted_steps(motion, fixed if legs_fixed is None else legs_fixed, step_config)
-    if beat:
-        motion = beat_lock(motion, music_beat_frames, fixed).motion
-    if foot:
-        motion = foot_lock(motion, fixed)
-    if speed and (beat or foot or footsteps):
-        motion = speed_limit(motion, fixed)
+def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing | None" = None,
+           constraints: "Constraints | np.ndarray | None" = None) -> Motion:
+    """``motion`` through the passes ``finishing`` turns on (default: as `choreo generate` does);
+    frames the ``constraints`` give (or a (T,) mask of fixed frames) stay. Each pass runs with the
+    settings ``finishing.configs`` gives it, or its own defaults.
+
+    The order: the speed limit first, so that a glitch is not taken for a motion beat, and last,
+    since re-timing stretches speeds. The root path and the pace before the footsteps, which plant
+    the feet along the travel as it will be. Footsteps before the beat lock: they move the motion
+    beats (a leg's swing is part of the body's speed), and a re-timing keeps a standing foot
+    standing (docs/results.md, "Feet")."""
+    from ..pipeline import Finishing
+
+    on = finishing or Finishing()
+    settings = on.configs
+    fixed = constraints.fixed_frames() if hasattr(constraints, "fixed_frames") else constraints
+    passes = ((on.speed_limit, speed_limit, fixed), (on.root_path, root_path, fixed), (on.pace, pace, fixed),
+              (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, fixed), (on.foot_lock, foot_lock, fixed))
+    for enabled, run, kept in passes:
+        if enabled:
+            motion = _run(run, motion, music_beat_frames, kept, settings.get(run.__name__))
+    if on.speed_limit and (on.beat_lock or on.foot_lock or on.footsteps):
+        motion = _run(speed_limit, motion, music_beat_frames, fixed, settings.get("speed_limit"))
     return motion
 
 
-__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "PaceConfig", "RootPathConfig", "SpeedLimitConfig", "StepConfig", "beat_lock", "finish",
-           "foot_lock", "lock_warp", "paced", "planted_steps", "smooth_root_path", "speed_limit"]
+def _run(run, motion: Motion, music_beat_frames: np.ndarray, fixed, config) -> Motion:
+    """One pass with its config (or its default); the beat lock also takes the music's beats."""
+    extra = {} if config is None else {"config": config}
+    if run is beat_lock:
+        return run(motion, music_beat_frames, fixed, **extra).motion
+    return run(motion, fixed, **extra)
+
+
+__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RootPathConfig",
+           "SpeedLimitConfig", "beat_lock", "finish", "foot_lock", "footsteps", "lock_warp", "pace", "root_path",
+           "speed_limit"]

@@ -15,9 +15,8 @@ the re-timing is a monotone warp of the dance's own frames:
 2. the warp runs through the pairs with a constant playback speed for ``hold_frames`` either
    side of each locked beat, and changes speed only between beats, along raised-cosine ramps.
    Why hold: a motion beat is a minimum of the smoothed joint speed, and a playback speed that
-   changes across it tilts that minimum by a few frames; measured on the LMMS songs, only 39 %
-   of locked beats were still within a frame of their music beat after a smoothly varying warp,
-   against 60-70 % with the hold (docs/results.md). Every speed stays within the bounds; a
+   changes across it tilts that minimum by a few frames, and far fewer locked beats stay within
+   a frame of their music beat (docs/results.md, "Beat lock"). Every speed stays within the bounds; a
    stretch too short for a hold and ramps plays at one constant speed;
 3. frames a user fixed (keys, seed motion, the kept parts of an inpainting) are anchors: the warp
    is the identity on them, so they stay exactly where they were given.

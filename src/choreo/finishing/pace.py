@@ -2,18 +2,16 @@
 toward their pace by scaling its travel, never by more than ``max_scale``.
 
 Real M2D dancers keep a steady pace along their ground track (the root's floor path low-passed at
-1 Hz): the train split's cha-cha, rumba and waltz clips run at 0.38-0.53 m/s, and within a genre
-they spread about 15 % around the median (`python scripts/real_speed_limits.py`). SGMD, on songs it
-has not heard, travels up to twice as fast (docs/results.md, "Whole songs"). This pass scales the
-ground track's displacement from its start (the sway and turns around the track stay as they are)
-toward the genre's pace, by a factor within [1 / max_scale, max_scale]. A pace is a property of a
-dance of at least ``min_seconds``: over 5 s excerpts of the real train clips it spreads from 0.51 to
-1.48 x the genre's (10th to 90th percentile), over 30 s from 0.87 to 1.25 x, so shorter dances keep
-their travel (docs/results.md, "Whole songs"). Pulling all the way, not
-only into the real clips' spread, missed the real dancer's pace by more than 20 % on 2 of the 9
-test songs instead of 4, at FIDs within their bootstrap intervals (docs/results.md, "Whole songs"). It runs on free dances only: a dance
-with frames a user fixed keeps the travel that reaches them. The pace before and after is kept in
-the dance's metadata (``pace``).
+1 Hz), and within a genre they spread little around its median (`python
+scripts/real_speed_limits.py`). SGMD, on songs it has not heard, travels much faster
+(docs/results.md, "Whole songs"). This pass scales the ground track's displacement from its start
+(the sway and turns around the track stay as they are) toward the genre's pace, by a factor
+within [1 / max_scale, max_scale]. A pace is a property of a dance of at least ``min_seconds``:
+over a few seconds real dancers keep no one pace, so shorter dances keep their travel. Why it
+pulls all the way rather than into the real clips' spread, and the figures behind both bounds:
+docs/results.md, "Whole songs". It runs on free dances only: a dance with frames a user fixed
+keeps the travel that reaches them. The pace before and after is kept in the dance's metadata
+(``pace``).
 """
 
 from __future__ import annotations
@@ -54,7 +52,7 @@ def travel_scale(pace: float, target: float, config: PaceConfig = PaceConfig()) 
     return float(np.clip(target / pace, 1 / config.max_scale, config.max_scale))
 
 
-def paced(motion: Motion, fixed: np.ndarray | None = None, config: PaceConfig = PaceConfig()) -> Motion:
+def pace(motion: Motion, fixed: np.ndarray | None = None, config: PaceConfig = PaceConfig()) -> Motion:
     """``motion`` with its travel scaled toward its genre's pace (its metadata's ``genre``, which a
     backend sets: None for a dance without a style; a motion without the key is left alone)."""
     target = target_pace(motion.metadata["genre"]) if "genre" in motion.metadata else None

@@ -1,9 +1,9 @@
 """Root path: the pelvis's travel low-passed, so the dancer moves along its path instead of
 wobbling on it.
 
-SGMD's dances jitter mostly in the root's path: on whole songs the root's own jerk is about 3 x a
-real dancer's while the body around the pelvis jerks about as much as real's (docs/results.md,
-"Whole songs"). Every joint moves with the root, so the wobble shows in every joint's jerk. This
+SGMD's dances jitter mostly in the root's path: on whole songs the root's own jerk is several times
+a real dancer's while the body around the pelvis jerks about as much as real's (docs/results.md,
+"Whole songs", "Where the rushing and the jitter came from"). Every joint moves with the root, so the wobble shows in every joint's jerk. This
 pass runs a zero-phase low-pass over the root's translation (every joint follows it; rotations are
 untouched) with the cut-off measured on whole songs. Frames a user fixed keep their root, the
 correction fading in over ``blend_seconds`` next to them.
@@ -31,7 +31,7 @@ class RootPathConfig:
             raise ParameterError("root path: cutoff_hz and blend_seconds must be positive")
 
 
-def smooth_root_path(motion: Motion, fixed: np.ndarray | None = None, config: RootPathConfig = RootPathConfig()) -> Motion:
+def root_path(motion: Motion, fixed: np.ndarray | None = None, config: RootPathConfig = RootPathConfig()) -> Motion:
     """``motion`` with its root translation low-passed; ``fixed`` frames keep theirs exactly."""
     fixed = np.zeros(motion.num_frames, bool) if fixed is None else np.asarray(fixed, bool)
     if motion.num_frames < 3 or fixed.all():

@@ -75,21 +75,23 @@ class TrainProgress:
     stage: str = ""  # for backends trained in stages (e.g. "style", "tempo")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class GeneratorPlugin:
     """What a backend package registers under the ``choreo.generators`` entry-point group."""
 
     name: str
     summary: str
-    ready: bool  # False while the backend is a placeholder
+    ready: bool = True  # False while the backend is a placeholder
     status: str = ""  # shown when not ready: what is missing and where it is tracked
     factory: Callable[..., Generator] | None = None  # builds a Generator (e.g. from a checkpoint)
     train: Callable[..., object] | None = None  # train(data_dir, out_dir, options, resume, progress, load_progress)
-    train_options: type | None = None  # dataclass of what `choreo train NAME` takes: flags are checked against it
+    train_options: type | None = None  # dataclass of what `choreo train NAME` takes: its option() fields are the flags
     default_checkpoint: Path | None = None  # shipped weights used when the user names none
-    options: type | None = None  # dataclass of its generation options: flags are checked against it before any work
+    options: type | None = None  # dataclass of its generation options, checked before any work; option() fields are flags
+    # the few words a command prints about a run, from the dance's metadata ("ddim 10 steps, guidance 2, seed 0")
+    describe: Callable[[dict], str] | None = None
     constraints: bool = False  # whether it dances under constraints (keys, seed motion, inpainting, a root path)
     # what it reads of the music (its Generator's attributes of the same names), known before it
-    # loads, so the song is analysed before the weights are read (choreo.pipeline.PendingBackend)
+    # loads, so the song is analysed before the weights are read (choreo.pipeline.Backend)
     listens_to_spectrum: bool = False
     reads_timbre: bool = True

@@ -5,8 +5,7 @@ from __future__ import annotations
 from importlib import import_module
 from importlib.metadata import entry_points
 
-from ..errors import ChoreoError, ParameterError
-from .base import Generator, GeneratorPlugin
+from .base import GeneratorPlugin
 
 ENTRY_POINT_GROUP = "choreo.generators"
 IN_TREE = {"sgmd": "choreo_sgmd", "graph": "choreo_graph"}  # found without entry points (a checkout run from PYTHONPATH)
@@ -19,10 +18,10 @@ def available_plugins() -> dict[str, GeneratorPlugin]:
         try:
             plugin = entry.load()
         except Exception as error:  # a broken third-party plugin must not break the CLI
-            plugin = GeneratorPlugin(entry.name, "(failed to load)", ready=False,
+            plugin = GeneratorPlugin(name=entry.name, summary="(failed to load)", ready=False,
                                      status=f"import error: {type(error).__name__}: {error}")
         if not isinstance(plugin, GeneratorPlugin):
-            plugin = GeneratorPlugin(entry.name, "(invalid plugin object)", ready=False,
+            plugin = GeneratorPlugin(name=entry.name, summary="(invalid plugin object)", ready=False,
                                      status=f"{entry.value} is not a GeneratorPlugin")
         plugins[entry.name] = plugin
     for name, module in IN_TREE.items():
@@ -32,18 +31,6 @@ def available_plugins() -> dict[str, GeneratorPlugin]:
             except ImportError:
                 pass
     return dict(sorted(plugins.items()))
-
-
-def load_generator(name: str, **kwargs) -> Generator:
-    """Build the generator registered as ``name``."""
-    plugins = available_plugins()
-    if name not in plugins:
-        known = ", ".join(plugins) or "none installed"
-        raise ParameterError(f"unknown generator {name!r} (available: {known})")
-    plugin = plugins[name]
-    if not plugin.ready or plugin.factory is None:
-        raise ChoreoError(f"generator {name!r} is not available yet: {plugin.status}")
-    return plugin.factory(**kwargs)
 
 
 def lazy_exports(package: str, exports: dict[str, str], namespace: dict):

@@ -46,8 +46,9 @@ def window_dance(window, motion, finished: bool = False, foot_lock: bool = False
     beats = music_beats(window.features)
     if finished:
         from ..finishing import finish
+        from ..pipeline import Finishing
 
-        motion = finish(motion, beats, foot=foot_lock, footsteps=footsteps)
+        motion = finish(motion, beats, Finishing(foot_lock=foot_lock, footsteps=footsteps))
     return Dance(f"{window.clip}@{window.start_frame}", motion.joint_positions(), beats)
 
 

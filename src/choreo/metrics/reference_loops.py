@@ -1,6 +1,6 @@
 """Slow, literal versions of reference metric definitions, kept as oracles.
 
-The vectorised metrics in this package are tested against these loops (tests/test_metrics.py)
+The vectorised metrics in this package are tested against these loops (tests/metrics/)
 and timed against them (benchmarks/bench_eval.py); nothing in choreo's own path calls them.
 """
 

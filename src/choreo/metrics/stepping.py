@@ -4,7 +4,7 @@ PFC weighs sliding by the root's acceleration, so a dancer who skates at an even
 These three figures look at the feet directly (Y up, joint positions in metres):
 
 - planted share: frames where one foot (its ankle or its toe) moves under 0.15 m/s horizontally.
-  Real M2D ballroom dancers: 39-46 % of frames.
+  Real M2D dancers' shares: docs/results.md, "Whole songs".
 - foot-root correlation: Pearson correlation, over frames, of the faster foot's horizontal speed
   with the root's. A stepping dancer's feet alternate between standing and swinging (low); a
   skater's feet travel with the body (high).

@@ -6,7 +6,7 @@ values, so this reproduces its arithmetic step by step, down to the dtype of eac
 (float32 audio is analysed in complex64 with some steps in float64, as librosa does) and the
 library doing each sum (scipy's FFT and sparse product, numpy's einsum): a change of the last bit
 can move a value across one of the CENS quantisation thresholds, which changes the output by up
-to a few hundredths, so "close" is not enough. tests/test_chroma.py checks bit equality with the
+to a few hundredths, so "close" is not enough. tests/music/test_chroma.py checks bit equality with the
 installed librosa.
 
 Only what choreo uses is here: ``tuning=0``, 12 chroma from a constant-Q transform at librosa's

@@ -1,0 +1,205 @@
+"""Regenerate the results tables in docs/results.md and README.md from the runs saved in docs/results/.
+
+    python scripts/results_tables.py            # rewrite every generated table in place
+    python scripts/results_tables.py --check    # exit 1 if a table differs from its data (writes nothing)
+
+A generated table sits between two marker lines:
+
+    <!-- table: whole-songs-summary (scripts/results_tables.py) -->
+    | ... |
+
+    <!-- end table -->
+
+(indented as the markers are, inside a list item) and is built by the function of that name in TABLES from the JSON files that
+`scripts/evaluate_whole_songs.py --json` wrote (docs/results/whole_songs/). To change a figure, rerun
+the evaluation, save its JSON there and run this script: never edit a generated table by hand.
+Tables without markers are hand-written (their runs' data is not kept).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from evaluate_whole_songs import mean_rows, target_failures
+
+REPO = Path(__file__).resolve().parents[1]
+RUNS = REPO / "docs" / "results" / "whole_songs"
+FILES = [REPO / "docs" / "results.md", REPO / "README.md"]
+MARKED = re.compile(r"^( *)(<!-- table: ([\w-]+) \(scripts/results_tables\.py\) -->\n)(.*?)^( *<!-- end table -->)",
+                    re.S | re.M)
+
+# Whole-song summary rows: label, run file (docs/results/whole_songs/NAME.json), columns shown in bold.
+SUMMARY = [
+    ("SGMD before", "sgmd-before-2026-12-05", ()),
+    ("**SGMD now** (guidance 2, root path, pace)", "sgmd",
+     ("pace", "planted", "jerk", "root_jerk", "body_jerk", "misses")),
+    ("ChoreoGraph before", "graph-before-2026-12-05", ()),
+    ("**ChoreoGraph now** (root path, pace)", "graph", ("jerk", "root_jerk")),
+    ("SGMD before, no style", "sgmd-no-style-before-2026-12-05", ()),
+    ("SGMD now, no style", "sgmd-no-style", ()),
+    ("ChoreoGraph before, no style", "graph-no-style-before-2026-12-05", ()),
+    ("ChoreoGraph now, no style", "graph-no-style", ()),
+]
+README = [
+    ("**SGMD, bundled model, as `choreo generate` writes it** (DDIM 10, guidance 2 on the music and 2 on "
+     "the style; speed limit, root path, pace, footsteps, beat lock)", "sgmd"),
+    ("**ChoreoGraph, bundled models and repertoire, as `choreo graph` writes it** (K = 512, each seed a "
+     "take; the same passes)", "graph"),
+    ("SGMD with the defaults until 2026-12-04 (guidance 2.5, no root path or pace pass)", "sgmd-before-2026-12-05"),
+]
+GUIDANCE = [("1", "sgmd-guidance-1-seed-1"), ("1.5 (seeds 0-2)", "sgmd-guidance-1.5-no-pace"),
+            ("2 (seeds 0-2)", "sgmd-guidance-2-no-pace"), ("2.5 (before)", "sgmd-guidance-2.5-seed-1")]
+OUTSIDE = [("SGMD", "sgmd"), ("ChoreoGraph", "graph")]
+
+
+@cache
+def run(name: str) -> dict:
+    """A saved run of scripts/evaluate_whole_songs.py."""
+    return json.loads((RUNS / f"{name}.json").read_text())
+
+
+def run_means(name: str) -> dict:
+    """The run's figures: per song the mean over seeds, then the mean over songs."""
+    return mean_rows([mean_rows(song["seeds"]) for song in run(name)["songs"].values()])
+
+
+def real_means() -> dict:
+    """The real dancers' figures, mean over the songs (the same songs in every run)."""
+    return mean_rows([song["real"] for song in run("sgmd")["songs"].values()])
+
+
+def fid(figure: list[float], interval: bool = True) -> str:
+    """An FID to one decimal, with its 95 % bootstrap interval."""
+    return f"{figure[0]:.1f} [{figure[1]:.1f}, {figure[2]:.1f}]" if interval else f"{figure[0]:.1f}"
+
+
+def table(header: list[str], align: list[str], rows: list[list[str]]) -> str:
+    """A Markdown table; align holds '---' or '---:' per column."""
+    lines = [header, align, *rows]
+    return "".join("| " + " | ".join(cells) + " |\n" for cells in lines)
+
+
+def bolded(cells: dict, bold: tuple) -> dict:
+    return {key: f"**{value}**" if key in bold else value for key, value in cells.items()}
+
+
+def summary_cells(means: dict, fids: dict, misses: str) -> dict:
+    """One summary row's cells by column."""
+    return {"pace": f"{means['pace']:.3f}", "reach": f"{means['reach']:.2f}", "planted": f"{means['planted']:.3f}",
+            "foot_root": f"{means['foot_root']:.3f}", "jerk": f"{means['jerk']:.0f}",
+            "root_jerk": f"{means['root_jerk']:.0f}", "body_jerk": f"{means['body_jerk']:.0f}",
+            "beat_dip": f"{means['beat_dip']:.3f}", "fid_k": fid(fids["fid_k"]), "fid_g": fid(fids["fid_g"]),
+            "misses": misses}
+
+
+def whole_songs_summary() -> str:
+    """docs/results.md, "Whole songs": means over the test songs of each run, FIDs, targets missed."""
+    header = ["dancer", "pace m/s", "reach m", "planted", "foot~root", "jerk", "root jerk", "body jerk", "beat dip",
+              "FID_k", "FID_g", "targets missed"]
+    rows = [["real dancers to the same songs", *summary_cells(real_means(), run("sgmd")["real_fid"], "").values()]]
+    for i, (label, name, bold) in enumerate(SUMMARY):
+        songs = run(name)["songs"]
+        misses = f"{len(target_failures(songs))}" + (f" of {6 * len(songs)}" if i == 0 else "")
+        rows.append([label, *bolded(summary_cells(run_means(name), run(name)["fid"], misses), bold).values()])
+    return table(header, ["---"] + ["---:"] * 8 + ["---"] * 2 + ["---:"], rows)
+
+
+def readme_results() -> str:
+    """README.md, "Results": the whole-song summary's main rows, fewer columns."""
+    columns = ["pace", "planted", "foot_root", "jerk", "beat_dip"]
+    real = summary_cells(real_means(), run("sgmd")["real_fid"], "")
+    rows = [["real dancers to the same songs (the reference)", *(real[c] for c in columns),
+             fid(run("sgmd")["real_fid"]["fid_k"], False), fid(run("sgmd")["real_fid"]["fid_g"], False)]]
+    for label, name in README:
+        cells = summary_cells(run_means(name), run(name)["fid"], "")
+        rows.append([label, *(cells[c] for c in columns), cells["fid_k"], cells["fid_g"]])
+    header = ["dancer", "pace", "planted", "foot~root", "jerk", "beat dip", "FID_k", "FID_g"]
+    return table(header, ["---"] + ["---:"] * 5 + ["---"] * 2, rows)
+
+
+def per_song_cells(mean: dict, real: dict, waltz: bool) -> list[str]:
+    """One generator's cells for a song: generated / real (real waltz jerk left out: 5.9 fps keyframes)."""
+    pair = lambda key, f: f"{mean[key]:{f}} / {real[key]:{f}}"  # noqa: E731
+    return [f"{mean['pace']:.2f} ({mean['pace'] / real['pace']:.2f})", pair("reach", ".1f"), pair("planted", ".2f"),
+            pair("foot_root", ".2f"), f"{mean['jerk']:.0f}" if waltz else pair("jerk", ".0f"), pair("beat_dip", ".2f")]
+
+
+def whole_songs_per_song() -> str:
+    """docs/results.md, "Whole songs": each test song, SGMD's and the graph's figures beside the real dancer's."""
+    sgmd, graph = run("sgmd")["songs"], run("graph")["songs"]
+    rows = [[name, *per_song_cells(mean_rows(entry["seeds"]), entry["real"], entry["genre"] == "waltz"),
+             *per_song_cells(mean_rows(graph[name]["seeds"]), entry["real"], entry["genre"] == "waltz")]
+            for name, entry in sgmd.items()]
+    cells = ["reach m", "planted", "foot~root", "jerk", "beat dip"]
+    return table(["song", "SGMD pace (x real)", *cells, "graph pace (x real)", *cells], ["---"] * 13, rows)
+
+
+def whole_songs_outside() -> str:
+    """docs/results.md, "Whole songs": the outside song, each style (mean over seeds)."""
+    targets = json.loads((RUNS / "outside-song-target-paces.json").read_text())
+    rows = []
+    for generator, name in OUTSIDE:
+        for style, seeds in next(iter(run(name)["outside"].values())).items():
+            m = mean_rows(seeds)
+            rows.append([f"{generator}, {'no style' if style == 'none' else style}", f"{targets[style]:.3f}",
+                         f"{np.mean([s['model_pace'] for s in seeds]):.3f}", f"{m['pace']:.3f}", f"{m['reach']:.1f}",
+                         f"{m['planted']:.3f}", f"{m['foot_root']:.3f}", f"{m['jerk']:.0f}", f"{m['beat_dip']:.3f}"])
+    header = ["dancer, style", "real pace", "model's own pace", "pace", "reach m", "planted", "foot~root", "jerk",
+              "beat dip"]
+    return table(header, ["---"] + ["---:"] * 8, rows)
+
+
+def whole_songs_guidance() -> str:
+    """docs/results.md, "Where the rushing and the jitter came from": music guidance on whole songs."""
+    rows = []
+    for label, name in GUIDANCE:
+        means, fids = run_means(name), run(name)["fid"]
+        rows.append([label, f"{means['pace']:.3f}", f"{means['planted']:.3f}", fid(fids["fid_k"]), fid(fids["fid_g"]),
+                     f"{len(target_failures(run(name)['songs']))}"])
+    header = ["music guidance", f"pace m/s (real {real_means()['pace']:.3f})", "planted", "FID_k", "FID_g",
+              "targets missed"]
+    return table(header, ["---:"] * 3 + ["---"] * 2 + ["---:"], rows)
+
+
+TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": whole_songs_per_song,
+          "whole-songs-outside": whole_songs_outside, "whole-songs-guidance": whole_songs_guidance,
+          "readme-results": readme_results}
+
+
+def regenerated(text: str) -> str:
+    """The file's text with every marked table rebuilt (an unknown table name is an error)."""
+    def rebuild(match: re.Match) -> str:
+        indent, start, name, _, end = match.groups()
+        if name not in TABLES:
+            raise SystemExit(f"results_tables: no table named {name!r}")
+        rows = "".join(indent + line for line in TABLES[name]().splitlines(keepends=True))
+        return indent + start + rows + "\n" + end  # a blank line ends the table before the marker
+    return MARKED.sub(rebuild, text)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="only report tables that differ; exit 1 if any")
+    args = parser.parse_args()
+    stale = []
+    for path in FILES:
+        text = path.read_text()
+        new = regenerated(text)
+        if new != text:
+            stale.append(path.relative_to(REPO))
+            if not args.check:
+                path.write_text(new)
+    verb = "differ from their data" if args.check else "rewritten"
+    print(f"{', '.join(map(str, stale))}: tables {verb}" if stale else "every generated table is up to date")
+    return 1 if stale and args.check else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

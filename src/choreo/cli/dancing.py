@@ -1,0 +1,184 @@
+"""What the dancing commands share: their options, declared here once, the request they build
+from them (``choreo.pipeline.DanceRequest``: the one road to a dance) and the writing of each
+song's dance. The CLI only parses, checks output paths before any work, and prints."""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Optional
+
+import typer
+
+from ..generator.base import MAX_SEED
+from ..pipeline import Finishing
+from .flags import flag_parameters, given_values, with_parameters
+from .numbers import Number
+from .progress import progress_bar, stderr_console
+from .text import markup
+
+if TYPE_CHECKING:
+    from ..pipeline import DanceRequest
+
+SONG = typer.Argument(..., help="Audio file: wav, mp3, ogg, flac or opus.")
+OUTPUT = typer.Option(..., "-o", "--output",
+                      help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several.")
+GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
+PREVIEW = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output.")
+BPM = typer.Option(None, "--bpm", parser=Number("--bpm"), help="The song's tempo, if you know it: beats exactly 60/BPM s "
+                                                                "apart, placed on the song's onsets (default: the tracker's tempo).")
+BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
+                                           "(time\\[,downbeat]) as DAWs and beat trackers export.")
+BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
+                            help="Who hears the beats: choreo (licence-clean) or madmom (pip install "
+                                 "\"choreo\\[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
+
+
+def shared_options(
+    style: Optional[str] = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text, or a schedule "
+                                                   "0:30=waltz,30:=cha-cha."),
+    checkpoint: Optional[Path] = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one."),
+    seed: int = typer.Option(0, parser=Number("--seed", -MAX_SEED, MAX_SEED, whole=True),
+                             help="Random seed: same seed, same dance (the graph: another walk, another take)."),
+    format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension "
+                                         "(generate --out-dir: a list like bvh,npz)."),
+    rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo "
+                                                         "(default: SMPL-24)."),
+    bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
+    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs "
+                                          "this job may use that other work leaves idle; OMP_NUM_THREADS is honoured). "
+                                          "Set it for bit-identical reruns: other thread counts round differently."),
+) -> None:
+    """The options every dancing command takes (its signature is what counts)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class DanceFlags:
+    """A dancing command's shared flags, as parsed."""
+
+    generator: str
+    style: str | None
+    checkpoint: Path | None
+    seed: int
+    format: str | None
+    rig: str | None
+    bpm: float | None
+    beats: Path | None
+    beat_tracker: str
+    threads: int | None
+    finishing: Finishing
+    options: dict[str, Any]  # the backend option flags given; the rest: the backend's defaults
+
+    def request(self, constrained: bool = False, **factory_options) -> "DanceRequest":
+        """The checked request (before any song is read): an unknown backend, a flag it does not
+        take, a value it refuses, unreadable --beats, constraints it cannot keep."""
+        from ..errors import ParameterError
+        from ..generator.options import option_names
+        from ..music import BeatSource
+        from ..pipeline import Backend, DanceRequest
+
+        backend = Backend(self.generator, self.checkpoint, **factory_options)
+        takes = option_names(backend.plugin.options) if backend.plugin.options else []
+        foreign = [name for name in self.options if name not in takes]
+        if foreign:
+            flags = ", ".join(f"--{name.replace('_', '-')}" for name in foreign)
+            raise ParameterError(f"{flags} {'is not an option' if len(foreign) == 1 else 'are not options'} of "
+                                 f"{self.generator} (its options: {', '.join(takes) or 'none'})")
+        beats = BeatSource.from_options(self.bpm, self.beats, self.beat_tracker)
+        return DanceRequest(backend=backend, style=self.style,
+                            seed=self.seed, options=self.options, finishing=self.finishing, beats=beats,
+                            threads=self.threads, constrained=constrained)
+
+
+def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
+    """Decorator of a dancing command: its signature gains the shared options, the finishing
+    flags (Finishing's fields) and ``backend``'s option flags (its plugin's options dataclass),
+    which it receives as one :class:`DanceFlags` argument, ``dance``. ``choose_generator``: the
+    command takes ``--generator`` (default ``backend``)."""
+    from ..generator import available_plugins
+
+    plugin = available_plugins().get(backend)
+    options_type = plugin.options if plugin is not None else None
+    extra = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) for p in inspect.signature(shared_options, eval_str=True).parameters.values()]
+    if choose_generator:
+        extra.append(inspect.Parameter("generator", inspect.Parameter.KEYWORD_ONLY, default=GENERATOR, annotation=str))
+    extra += flag_parameters(Finishing, given_only=False, panel="Finishing passes")
+    extra += flag_parameters(options_type, panel=f"{backend} options") if options_type else []
+
+    def decorate(command: Callable) -> Callable:
+        @functools.wraps(command)
+        def run(**values):
+            finishing = Finishing(**given_values(Finishing, values))
+            options = given_values(options_type, values) if options_type else {}
+            shared = {name: values.pop(name) for name in inspect.signature(shared_options).parameters}
+            flags = DanceFlags(generator=values.pop("generator", backend), finishing=finishing, options=options, **shared)
+            return command(**values, dance=flags)
+
+        own = [p for p in inspect.signature(command, eval_str=True).parameters.values() if p.name != "dance"]
+        run.__signature__ = inspect.Signature(own)
+        return with_parameters(run, extra)
+
+    return decorate
+
+
+@dataclass(frozen=True, kw_only=True)
+class Outputs:
+    """Where one song's dance goes, and how."""
+
+    paths: list[str]  # files, or - for stdout
+    format: str | None = None  # overrides the extension (one output)
+    rig: str | None = None
+    preview: bool = False  # also an MP4 with the music beside the first file
+
+    def check(self) -> None:
+        """Every output checked before any work or any file: a writable folder, a known format."""
+        from ..errors import ParameterError
+        from ..fileio import output_target
+        from ..formats import check_output_format
+
+        if self.paths.count("-") > 1 or (len(self.paths) > 1 and self.format):
+            raise ParameterError("with several outputs, name each by its extension (and at most one '-')")
+        for path in self.paths:
+            if path != "-":
+                output_target(path)  # a writable folder, and nothing there that is not a regular file
+            check_output_format(path, self.format, self.rig)
+
+
+def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints: Callable | None = None) -> dict:
+    """Dance one song, write every output atomically, print a line; a summary for --json."""
+    from ..formats import write_motions
+
+    outputs.check()
+    with progress_bar(f"analysing {song.name}") as update:
+        music = request.analyse(song, progress=lambda done, total: update(round(done), round(total)))
+    fixed = constraints(music) if constraints else None
+    started = time.perf_counter()
+    with progress_bar("dancing", 100) as update:
+        motion = request.dance(music, fixed, progress=lambda fraction: update(round(fraction * 100), 100))
+    seconds = time.perf_counter() - started
+    meta = motion.metadata
+    if meta.get("style_notice"):
+        stderr_console.print(f"[yellow]note:[/yellow] {markup(meta['style_notice'])}", highlight=False)
+    written = [path for path in outputs.paths if path != "-"]
+    companions = {}
+    if outputs.preview and written:  # the video joins the motions' all or nothing
+        from ..render import RenderConfig
+        from .render_command import render_preview
+
+        video = str(Path(written[0]).with_suffix(".mp4"))
+        companions[video] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
+    write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.rig, companions=companions)
+    written += list(companions)
+    if written:
+        kept = f", {fixed.describe()}" if fixed else ""
+        describe = request.backend.plugin.describe
+        how = describe(meta) if describe else ""
+        done = (f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at "
+                f"{motion.fps:g} fps ({request.backend.name}, {how}{kept}; {seconds:.1f} s)")
+        stderr_console.print(markup(done), highlight=False)
+    return {"song": str(song), "ok": True, "outputs": written, "seconds_of_dance": round(motion.duration, 3),
+            "frames": motion.num_frames, "fps": motion.fps, "genre": meta.get("genre"), "seed": request.seed,
+            "steps": meta.get("steps"), "generation_seconds": round(seconds, 3)}

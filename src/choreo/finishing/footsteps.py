@@ -1,0 +1,155 @@
+"""Footsteps: each foot stands until the body has moved away from it, then steps to where the dance
+puts it, as procedural foot placement in games does.
+
+Generated dancers glide: their ankles travel with the root instead of alternating between
+standing and swinging (docs/results.md, "Feet"). Neither backend can learn the timing of steps from
+M2D (its motion is not aligned with its music), and a pin on the frames where a foot happens to be
+slow cannot invent the steps that are missing. So the steps are planned here, from the dance
+itself: a foot stays where it landed until the place the dance wants it is ``trigger`` metres
+away, then it swings there in ``swing_seconds`` (one foot at a time, the one left furthest
+behind first) and lands where the dance has it at the end of the swing. The legs reach the
+planned ankle positions by two-bone IK (hip and knee), each foot keeping the orientation the dance
+gave it; the root and the upper body are not touched. Frames a user fixed are left as they are,
+the correction fading in and out over ``blend_seconds`` around them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..motion import Motion
+from ..motion.filters import fixed_weights
+from ..motion.motion import frame_chunks
+from ..skeleton import SMPL24
+from ..skeleton import rotations as rot
+from ..skeleton.kinematics import global_rotations
+
+if TYPE_CHECKING:
+    from ..constraints import Constraints
+
+LEGS = ((1, 4, 7), (2, 5, 8))  # (hip, knee, ankle) of the left and the right leg in SMPL-24
+TURNED_JOINTS = tuple(joint for leg in LEGS for joint in leg)  # the only rotations the pass changes
+HORIZONTAL = np.array([1.0, 0.0, 1.0])  # Y is up
+
+
+@dataclass(frozen=True, kw_only=True)
+class FootstepsConfig:
+    trigger: float = 0.06  # metres: a standing foot this far (horizontally) from where the dance wants it steps
+    swing_seconds: float = 0.25  # how long a step takes in the air
+    lift: float = 0.04  # metres the ankle rises at the middle of a step
+    blend_seconds: float = 0.3  # fade of the correction next to frames a user fixed
+    # How far each ankle goes from where the dance puts it to where the plan does: all the way, feet stand
+    # far more often than real dancers' and FID_g rises; why this share: docs/results.md, "Feet".
+    strength: float = 0.65
+
+    def __post_init__(self):
+        if self.trigger <= 0 or self.swing_seconds <= 0 or self.lift < 0 or self.blend_seconds <= 0:
+            raise ParameterError("footsteps: trigger, swing and blend must be positive, lift >= 0")
+        if not 0.0 <= self.strength <= 1.0:
+            raise ParameterError(f"footsteps: strength must be in [0, 1], got {self.strength}")
+
+
+def plan_steps(wanted: np.ndarray, fps: float, config: FootstepsConfig = FootstepsConfig()) -> np.ndarray:
+    """(T, 2, 3) ankle positions that step: ``wanted`` (T, 2, 3), where the dance puts the left
+    and right ankle, followed by feet that stand still between steps."""
+    frames = len(wanted)
+    swing = max(2, round(config.swing_seconds * fps))
+    planned = np.empty_like(wanted)
+    anchors = wanted[0].copy()
+    stepping = None  # (foot, first frame, landing frame, from, to)
+    for t in range(frames):
+        if stepping is None:
+            drift = np.linalg.norm((wanted[t] - anchors) * HORIZONTAL, axis=-1)
+            foot = int(np.argmax(drift))
+            if drift[foot] > config.trigger:
+                land = min(t + swing, frames - 1)
+                stepping = (foot, t, land, anchors[foot].copy(), wanted[land, foot].copy())
+        planned[t] = anchors
+        if stepping is not None:
+            foot, first, land, start, end = stepping
+            s = (t - first) / max(land - first, 1)
+            ease = s * s * (3 - 2 * s)  # smoothstep: the foot leaves and lands at rest
+            planned[t, foot] = start + (end - start) * ease + [0.0, config.lift * np.sin(np.pi * s), 0.0]
+            if t >= land:
+                anchors[foot], stepping = end, None
+    return planned
+
+
+def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) shortest rotations taking directions ``a`` onto ``b`` (N, 3)."""
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    axis = np.cross(a, b)
+    sin = np.linalg.norm(axis, axis=-1, keepdims=True)
+    angle = np.arctan2(sin[:, 0], (a * b).sum(-1))
+    axis = np.where(sin > 1e-9, axis / np.maximum(sin, 1e-12), [1.0, 0.0, 0.0])
+    return rot.axis_angle_to_matrix(axis * angle[:, None])
+
+
+def two_bone_ik(globals_: np.ndarray, positions: np.ndarray, leg: tuple[int, int, int],
+                targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """New world rotations (T, 3, 3) of the hip and the knee that put the ankle at ``targets``
+    (as near as the leg reaches): the knee bends in its own plane to the right hip-ankle distance,
+    then the hip turns the leg onto the target."""
+    hip, knee, ankle = leg
+    h, k, a = positions[:, hip], positions[:, knee], positions[:, ankle]
+    upper, lower = np.linalg.norm(k - h, axis=-1), np.linalg.norm(a - k, axis=-1)
+    reach = np.clip(np.linalg.norm(targets - h, axis=-1), np.abs(upper - lower) + 1e-4, upper + lower - 1e-4)
+    wanted_angle = np.arccos(np.clip((upper**2 + lower**2 - reach**2) / (2 * upper * lower), -1.0, 1.0))
+    current_angle = np.arccos(np.clip(((h - k) * (a - k)).sum(-1) / (upper * lower), -1.0, 1.0))
+    normal = np.cross(h - k, a - k)
+    size = np.linalg.norm(normal, axis=-1, keepdims=True)
+    lateral = globals_[:, knee, :, 0]  # a straight leg has no plane: bend about the knee's own x axis
+    normal = np.where(size > 1e-6, normal / np.maximum(size, 1e-12), lateral)
+    bend = rot.axis_angle_to_matrix(normal * (wanted_angle - current_angle)[:, None])  # opens the angle at the knee
+    knee_world = bend @ globals_[:, knee]
+    bent_ankle = k + np.einsum("tij,tj->ti", bend, a - k)
+    turn = rotation_between(bent_ankle - h, targets - h)
+    return turn @ globals_[:, hip], turn @ knee_world
+
+
+def footsteps(motion: Motion, fixed: "Constraints | np.ndarray | None" = None,
+              config: FootstepsConfig = FootstepsConfig()) -> Motion:
+    """The dance with feet that stand and step. Frames in ``fixed`` (a (T,) mask) stay unchanged;
+    given :class:`Constraints`, the frames where a leg's rotation is given do (a root path or an
+    arm fixes no leg, and the pass turns only the legs)."""
+    if hasattr(fixed, "frames_fixing"):
+        fixed = fixed.frames_fixing(TURNED_JOINTS)
+    fixed = np.zeros(motion.num_frames, bool) if fixed is None else np.asarray(fixed, bool)
+    if fixed.shape != (motion.num_frames,):
+        raise ParameterError(f"fixed frames must be a ({motion.num_frames},) mask, got {fixed.shape}")
+    if motion.num_frames < 3 or tuple(motion.skeleton.parents) != tuple(SMPL24.parents) or fixed.all():
+        return motion  # another skeleton's legs are not where SMPL-24's are
+    positions = motion.joint_positions()
+    wanted = positions[:, [leg[2] for leg in LEGS]]
+    weight = config.strength * fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
+    targets = wanted + (plan_steps(wanted, motion.fps, config) - wanted) * weight
+    rotations = motion.rotations.copy()
+    for chunk in frame_chunks(motion.num_frames):  # a song's rotation matrices at once would be large
+        rotations[chunk] = legs_reaching(motion.rotations[chunk], positions[chunk], targets[chunk],
+                                         motion.skeleton.parents)
+    rotations[fixed] = motion.rotations[fixed]  # exactly as given, not merely within rounding
+    del positions, targets  # before the new motion's checks copy the rotations once more
+    return motion.replace(rotations=rotations, metadata=dict(motion.metadata))
+
+
+def legs_reaching(quaternions: np.ndarray, positions: np.ndarray, targets: np.ndarray, parents) -> np.ndarray:
+    """(T, J, 4) local rotations with each leg's hip, knee and ankle turned so its ankle reaches
+    ``targets`` (T, 2, 3), every foot keeping its world orientation."""
+    local = rot.quaternion_to_matrix(quaternions)
+    world = global_rotations(local, parents)
+    for side, (hip, knee, ankle) in enumerate(LEGS):
+        hip_world, knee_world = two_bone_ik(world, positions, (hip, knee, ankle), targets[:, side])
+        local[:, hip] = np.swapaxes(world[:, parents[hip]], -1, -2) @ hip_world
+        local[:, knee] = np.swapaxes(hip_world, -1, -2) @ knee_world
+        local[:, ankle] = np.swapaxes(knee_world, -1, -2) @ world[:, ankle]  # the foot keeps its orientation
+    out = quaternions.copy()
+    legs = list(TURNED_JOINTS)
+    turned = rot.matrix_to_quaternion(local[:, legs])
+    same_side = np.sign((turned * quaternions[:, legs]).sum(-1, keepdims=True) + 1e-12)  # q and -q: keep the input's sign
+    out[:, legs] = turned * same_side
+    return out

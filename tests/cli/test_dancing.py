@@ -1,0 +1,90 @@
+"""choreo.cli.dancing: the options every dancing command shares, declared once, and the road to choreo.dance."""
+
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import choreo
+from choreo.cli import main
+from choreo.formats import read_motion
+from choreo.generator import available_plugins
+from choreo.generator.options import FLAG, flag_fields
+from choreo.pipeline import Finishing
+
+SONG = Path(__file__).parents[2] / "examples" / "drum_and_bass_174bpm.wav"
+DANCING = (("generate",), ("inbetween",), ("inpaint",), ("trajectory",), ("graph", "dance"))
+SHARED = ("--style", "--checkpoint", "--seed", "--format", "--rig", "--bpm", "--beats", "--beat-tracker", "--threads")
+
+
+def command_params(*command: str) -> dict:
+    """{flag: its click parameter} of a command, e.g. command_params("graph", "dance")."""
+    import click
+    from typer.main import get_command
+
+    from choreo.cli.app import app
+
+    found = get_command(app)
+    for name in command:
+        found = found.get_command(click.Context(found), name)
+    return {flag: p for p in found.params for flag in (*p.opts, *p.secondary_opts)}
+
+
+def flag_names(options_type) -> list[str]:
+    return [f.metadata[FLAG].names[0].split("/")[0] if f.metadata[FLAG].names else f"--{f.name.replace('_', '-')}"
+            for f in flag_fields(options_type)]
+
+
+def test_every_dancing_command_takes_the_shared_and_the_finishing_flags():
+    for command in DANCING:
+        params = command_params(*command)
+        for flag in SHARED + tuple(flag_names(Finishing)) + ("--no-root-path", "--no-pace", "--no-footsteps"):
+            assert flag in params, (command, flag)
+
+
+def test_backend_flags_and_their_defaults_come_from_the_plugins_options():
+    sgmd, graph = available_plugins()["sgmd"].options, available_plugins()["graph"].options
+    for command, options_type in ((("generate",), sgmd), (("inpaint",), sgmd), (("graph", "dance"), graph)):
+        params = command_params(*command)
+        for flag in flag_names(options_type):
+            assert flag in params, (command, flag)
+    assert f"[default: {sgmd().steps}]" in command_params("generate")["--steps"].help
+    assert f"[default: {graph().top_k}]" in command_params("graph", "dance")["--top-k"].help
+    assert "--top-k" not in command_params("generate") and "--guidance" not in command_params("graph", "dance")
+
+
+def test_train_commands_are_made_from_each_backends_train_options(capsys):
+    for name in ("sgmd", "graph"):
+        params = command_params("train", name)
+        for flag in flag_names(available_plugins()[name].train_options) + ["--data", "--out", "--resume"]:
+            assert flag in params, (name, flag)
+    assert "--prompt" in command_params("train", "sgmd") and "--prompt" not in command_params("train", "graph")
+    assert "[default: 6.36]" not in command_params("train", "graph")["--steps"].help  # each backend's own defaults
+    assert main(["train", "graph", "--data", ".", "--out", "x", "--prompt", "name"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_the_root_path_and_pace_flags_turn_their_passes_off(tmp_path, capsys, tiny_checkpoint):
+    common = ["generate", str(SONG), "--checkpoint", str(tiny_checkpoint), "--steps", "2", "--threads", "1"]
+    assert main([*common, "-o", str(tmp_path / "plain.npz"), "--no-root-path", "--no-pace"]) == 0
+    assert main([*common, "-o", str(tmp_path / "smooth.npz")]) == 0
+    plain, smooth = read_motion(tmp_path / "plain.npz"), read_motion(tmp_path / "smooth.npz")
+    assert not np.allclose(plain.root_positions, smooth.root_positions, atol=1e-4)
+    same = choreo.dance(SONG, checkpoint=tiny_checkpoint, options={"steps": 2}, threads=1,
+                        finishing=Finishing(root_path=False, pace=False))
+    np.testing.assert_allclose(same.root_positions, plain.root_positions, atol=1e-5)
+
+
+def test_every_finishing_field_but_its_configs_is_a_flag():
+    assert {f.name for f in fields(Finishing)} - {f.name for f in flag_fields(Finishing)} == {"configs"}
+
+
+@pytest.mark.parametrize("command", DANCING)
+def test_an_unknown_backend_option_value_is_refused_before_the_song_is_read(tmp_path, capsys, command):
+    bad = "--guidance" if command[0] != "graph" else "--top-k"
+    args = [*command, str(tmp_path / "missing.wav"), "-o", str(tmp_path / "d.bvh"), bad, "0" if bad == "--top-k" else "1e308"]
+    args += {"inbetween": ["--start", "x.bvh"], "inpaint": ["--motion", "x.bvh"], "trajectory": ["--path", "x.csv"]}.get(command[0], [])
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "missing.wav" not in err and len(err.strip().splitlines()) == 1

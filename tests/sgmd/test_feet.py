@@ -1,0 +1,119 @@
+"""SGMD's foot terms (contacts from the data, the feet's speeds, the legs' weight) and fine-tuning
+from another run's state: the training levers of docs/sgmd.md, "Feet"."""
+
+import numpy as np
+import pytest
+import torch
+from tests.conftest import synthetic_windows
+
+from choreo.motion import Motion, motion_to_vector
+from choreo.motion.vector import CONTACT_SLICE, ROOT_SLICE, ROTATION_SLICE
+from choreo.skeleton import LOWER_BODY_JOINTS
+from choreo_sgmd.config import DiffusionConfig, TrainConfig, model_config
+from choreo_sgmd.losses import diffusion_losses, leg_channels
+from choreo_sgmd.normalizer import Normalizer
+from choreo_sgmd.training import Trainer
+
+
+def skating_and_standing():
+    """(normalised prediction, normalised target, normaliser): the target stands still with both
+    feet marked planted; the prediction glides 1 m/s along x and marks no contact."""
+    frames = 30
+    standing = Motion.from_axis_angle(np.zeros((frames, 3)) + [0, 0.9, 0], np.zeros((frames, 24, 3)))
+    gliding = standing.replace(root_positions=standing.root_positions + np.arange(frames)[:, None] / 30 * [1.0, 0, 0])
+    target, predicted = (torch.from_numpy(motion_to_vector(m))[None].float() for m in (standing, gliding))
+    assert float(target[..., CONTACT_SLICE].min()) == 1 and float(predicted[..., CONTACT_SLICE].max()) == 0
+    normalizer = Normalizer.fit(torch.cat([target[0], predicted[0]]))
+    return normalizer.normalize(predicted), normalizer.normalize(target), normalizer
+
+
+def test_target_contacts_pin_feet_the_model_does_not_mark():
+    predicted, target, normalizer = skating_and_standing()
+    own = diffusion_losses(predicted, target, normalizer, contact_source="predicted")
+    data = diffusion_losses(predicted, target, normalizer, contact_source="target")
+    assert float(own.foot) == 0.0  # the model marks no contact, so EDGE's term is silent
+    assert float(data.foot) == pytest.approx((1 / 30) ** 2, rel=1e-3)  # 1 m/s = 1/30 m per frame, every foot joint
+    with pytest.raises(ValueError, match="contact_source"):
+        diffusion_losses(predicted, target, normalizer, contact_source="both")
+
+
+def test_stepping_term_compares_the_feet_speeds_in_metres_per_second():
+    predicted, target, normalizer = skating_and_standing()
+    assert float(diffusion_losses(target, target, normalizer).stepping) == 0.0
+    assert float(diffusion_losses(predicted, target, normalizer).stepping) == pytest.approx(1.0, rel=1e-3)  # (1 m/s)^2
+    config = DiffusionConfig(stepping_weight=2.0)
+    terms = diffusion_losses(predicted, target, normalizer)
+    without = DiffusionConfig()
+    assert float(terms.total(config) - terms.total(without)) == pytest.approx(2.0 * float(terms.stepping), rel=1e-5)
+
+
+def test_root_speed_term_compares_pace_whatever_the_direction():
+    predicted, target, normalizer = skating_and_standing()  # the prediction glides 1 m/s, the target stands
+    assert float(diffusion_losses(predicted, target, normalizer).root_speed) == pytest.approx(1.0, rel=1e-3)
+    backwards_motion = normalizer.denormalize(predicted)
+    backwards_motion[..., ROOT_SLICE.start] *= -1  # the root's x: the same glide the other way
+    backwards = normalizer.normalize(backwards_motion)
+    assert float(diffusion_losses(backwards, predicted, normalizer).root_speed) == pytest.approx(0.0, abs=1e-6)
+    assert float(diffusion_losses(backwards, predicted, normalizer).joints) > 0  # which the other terms do see
+    terms = diffusion_losses(predicted, target, normalizer)
+    added = terms.total(DiffusionConfig(root_speed_weight=3.0)) - terms.total(DiffusionConfig())
+    assert float(added) == pytest.approx(3.0 * float(terms.root_speed), rel=1e-5)
+    with pytest.raises(ValueError, match="root_speed_weight"):
+        DiffusionConfig(root_speed_weight=-1.0)
+
+
+def test_leg_weight_scales_only_the_legs_rotation_channels():
+    legs = leg_channels(151)
+    assert int(legs.sum()) == 6 * (len(LOWER_BODY_JOINTS) - 1)
+    assert not legs[:ROTATION_SLICE.start + 6].any()  # contacts, root and the pelvis' own rotation are not legs
+    normalizer = Normalizer.fit(torch.randn(100, 151))
+    target = torch.zeros(1, 5, 151)
+    leg, arm = target.clone(), target.clone()
+    leg[..., ROTATION_SLICE.start + 6 * 4] = 0.5  # the left knee
+    arm[..., ROTATION_SLICE.start + 6 * 18] = 0.5  # the left elbow
+    for moved, factor in ((leg, 3.0), (arm, 1.0)):
+        plain = diffusion_losses(moved, target, normalizer).reconstruction
+        weighted = diffusion_losses(moved, target, normalizer, leg_weight=3.0).reconstruction
+        assert float(weighted) == pytest.approx(factor * float(plain))
+
+
+@pytest.mark.parametrize("bad", [{"contact_source": "model"}, {"stepping_weight": -1.0}, {"leg_weight": 0.0}])
+def test_bad_foot_settings_are_refused(bad):
+    with pytest.raises(ValueError):
+        DiffusionConfig(**bad)
+
+
+def small_trainer(diffusion=DiffusionConfig(), latent=32):
+    config = model_config("tiny", latent_dim=latent, style_dim=8)
+    return Trainer(config, diffusion, TrainConfig(batch_size=2, max_steps=10), synthetic_windows(), None)
+
+
+def test_fine_tuning_starts_from_the_weights_and_step_under_new_losses():
+    source = small_trainer()
+    for _ in range(3):
+        source.train_step()
+    state = source.state()
+    tuned = small_trainer(DiffusionConfig(contact_source="target", stepping_weight=0.1))
+    tuned.start_from(state, "base.pt")
+    assert tuned.step == 3 and tuned.started_from == {"checkpoint": "base.pt", "step": 3}
+    for name, value in source.model.state_dict().items():
+        torch.testing.assert_close(tuned.model.state_dict()[name], value)
+    tuned.train_step()
+    assert tuned.step == 4 and tuned.state()["started_from"]["step"] == 3  # kept in its own checkpoints
+    resumed = small_trainer(DiffusionConfig(contact_source="target", stepping_weight=0.1))
+    resumed.load_state(tuned.state())
+    assert resumed.started_from == tuned.started_from
+
+
+def test_fine_tuning_refuses_another_network():
+    state = small_trainer().state()
+    with pytest.raises(ValueError, match="cannot start from base.pt: its network differs .*latent_dim 32 -> 64"):
+        small_trainer(latent=64).start_from(state, "base.pt")
+
+
+def test_train_command_refuses_a_missing_init_checkpoint(tmp_path, capsys):
+    from choreo.cli import main
+
+    code = main(["train", "sgmd", "--data", str(tmp_path), "--out", str(tmp_path / "out"),
+                 "--init-from", str(tmp_path / "missing.pt")])
+    assert code == 2 and "--init-from" in capsys.readouterr().err
