@@ -88,3 +88,40 @@ def test_an_unknown_backend_option_value_is_refused_before_the_song_is_read(tmp_
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "missing.wav" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_fps_writes_the_same_dance_at_another_rate(tmp_path, tiny_checkpoint):
+    common = ["generate", str(SONG), "--checkpoint", str(tiny_checkpoint), "--steps", "2", "--threads", "1"]
+    assert main([*common, "-o", str(tmp_path / "d30.bvh")]) == 0
+    assert main([*common, "-o", str(tmp_path / "d60.bvh"), "--fps", "60"]) == 0
+    assert "Frame Time: 0.01666667" in (tmp_path / "d60.bvh").read_text()
+    d30, d60 = read_motion(tmp_path / "d30.bvh"), read_motion(tmp_path / "d60.bvh")
+    assert d60.fps == 60 and abs(d60.num_frames - 2 * d30.num_frames) <= 1
+    assert np.abs(d60.joint_positions()[::2] - d30.joint_positions()).max() < 0.01
+    assert np.abs(np.diff(d60.joint_positions(), axis=0)).max(axis=(1, 2)).min() > 0  # no repeated frame
+
+
+@pytest.mark.parametrize("command", DANCING)
+@pytest.mark.parametrize("fps", ["0", "1000", "nan"])
+def test_a_frame_rate_no_file_is_written_at_is_one_line_and_exit_2(tmp_path, capsys, command, fps):
+    args = [*command, str(SONG), "-o", str(tmp_path / "d.bvh"), "--fps", fps]
+    args += {"inbetween": ["--start", "x.bvh"], "inpaint": ["--motion", "x.bvh"], "trajectory": ["--path", "x.csv"]}.get(command[0], [])
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--fps" in err and not (tmp_path / "d.bvh").exists()
+
+
+def test_in_place_takes_the_travel_out_of_every_written_file(tmp_path, tiny_checkpoint):
+    from choreo.motion.travel import ground_track
+
+    common = ["generate", str(SONG), "--checkpoint", str(tiny_checkpoint), "--steps", "2", "--threads", "1"]
+    assert main([*common, "-o", str(tmp_path / "travel.npz")]) == 0
+    assert main([*common, "-o", str(tmp_path / "still.npz"), "-o", str(tmp_path / "still.bvh"), "--in-place"]) == 0
+    travel = read_motion(tmp_path / "travel.npz")
+    moved = ground_track(travel.root_positions, travel.fps)
+    assert np.linalg.norm(moved - moved[0], axis=-1).max() > 0.2  # there was travel to take out
+    for name in ("still.npz", "still.bvh"):
+        still = read_motion(tmp_path / name)
+        track = ground_track(still.root_positions, still.fps)
+        assert np.linalg.norm(track - track[0], axis=-1).max() <= 0.02, name
+        np.testing.assert_allclose(still.root_positions[:, 1], travel.root_positions[:, 1], atol=1e-4)

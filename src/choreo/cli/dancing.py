@@ -32,6 +32,10 @@ BPM = typer.Option(None, "--bpm", parser=Number("--bpm"), help="The song's tempo
                                                                 "apart, placed on the song's onsets (default: the tracker's tempo).")
 BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
                                            "(time\\[,downbeat]) as DAWs and beat trackers export.")
+FPS = typer.Option(None, "--fps", parser=Number("--fps"), help="Write the dance at this frame rate, e.g. 24, 60 or 120 "
+                   "(default: the backend's, 30): resampled after the finishing passes, so beats and steps keep their times.")
+IN_PLACE = typer.Option(False, "--in-place", help="Take the travel out: the dancer stays where it started, its sway, "
+                        "height and facing kept (for a game engine that moves the character itself).")
 BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
                             help="Who hears the beats: choreo (licence-clean) or madmom (pip install "
                                  "\"choreo\\[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
@@ -51,6 +55,7 @@ def shared_options(
     threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs "
                                           "this job may use that other work leaves idle; OMP_NUM_THREADS is honoured). "
                                           "Set it for bit-identical reruns: other thread counts round differently."),
+    fps: Optional[float] = FPS, in_place: bool = IN_PLACE,
 ) -> None:
     """The options every dancing command takes (its signature is what counts)."""
 
@@ -69,8 +74,21 @@ class DanceFlags:
     beats: Path | None
     beat_tracker: str
     threads: int | None
+    fps: float | None  # the files' frame rate; None: the dance's own
+    in_place: bool  # the files without the travel
     finishing: Finishing
     options: dict[str, Any]  # the backend option flags given; the rest: the backend's defaults
+
+    def __post_init__(self):
+        if self.fps is not None:
+            from ..motion.delivery import check_fps
+
+            check_fps(self.fps)
+
+    def outputs(self, paths: list[str], preview: bool = False, format: bool = True) -> "Outputs":
+        """Where and how a song's dance is written (``format``: --format names one file's format)."""
+        return Outputs(paths=paths, format=self.format if format else None, rig=self.rig, preview=preview,
+                       fps=self.fps, in_place=self.in_place)
 
     def request(self, constrained: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not
@@ -132,6 +150,9 @@ class Outputs:
     format: str | None = None  # overrides the extension (one output)
     rig: str | None = None
     preview: bool = False  # also an MP4 with the music beside the first file
+    fps: float | None = None  # written at this frame rate (choreo.motion.delivery.at_fps)
+    in_place: bool = False  # written without the travel (choreo.motion.delivery.in_place)
+
 
     def check(self) -> None:
         """Every output checked before any work or any file: a writable folder, a known format."""
@@ -150,6 +171,7 @@ class Outputs:
 def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints: Callable | None = None) -> dict:
     """Dance one song, write every output atomically, print a line; a summary for --json."""
     from ..formats import write_motions
+    from ..motion.delivery import delivered
 
     outputs.check()
     with progress_bar(f"analysing {song.name}") as update:
@@ -159,6 +181,7 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
     with progress_bar("dancing", 100) as update:
         motion = request.dance(music, fixed, progress=lambda fraction: update(round(fraction * 100), 100))
     seconds = time.perf_counter() - started
+    motion = delivered(motion, outputs.fps, outputs.in_place)
     meta = motion.metadata
     if meta.get("style_notice"):
         stderr_console.print(f"[yellow]note:[/yellow] {markup(meta['style_notice'])}", highlight=False)

@@ -12,7 +12,7 @@ from typing import List, Optional
 
 import typer
 
-from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, Outputs, dance_one, dancing_command
+from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, dance_one, dancing_command
 from .progress import stderr_console
 from .text import markup
 
@@ -79,10 +79,10 @@ def generate(
     if shard is not None:
         songs = Shard.parse(shard).select(songs)
 
-    def outputs_for(song: Path) -> Outputs:
+    def outputs_for(song: Path):
         if output is not None:
-            return Outputs(paths=list(output), format=dance.format, rig=dance.rig, preview=preview)
-        return Outputs(paths=[str(out_dir / f"{song.stem}.{ext}") for ext in formats], rig=dance.rig, preview=preview)
+            return dance.outputs(list(output), preview)
+        return dance.outputs([str(out_dir / f"{song.stem}.{ext}") for ext in formats], preview, format=False)
 
     def done_before(song: Path) -> bool:
         files = outputs_for(song).paths
@@ -151,7 +151,7 @@ def inbetween(
             fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
         return fixed
 
-    dance_one(dance.request(constrained=True), song, Outputs(paths=output, format=dance.format, rig=dance.rig), constraints)
+    dance_one(dance.request(constrained=True), song, dance.outputs(output), constraints)
 
 
 @dancing_command("sgmd")
@@ -183,7 +183,7 @@ def inpaint(
             raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
         return fixed
 
-    dance_one(dance.request(constrained=True), song, Outputs(paths=output, format=dance.format, rig=dance.rig), constraints)
+    dance_one(dance.request(constrained=True), song, dance.outputs(output), constraints)
 
 
 @dancing_command("sgmd")
@@ -204,4 +204,4 @@ def trajectory(
         xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
         return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
 
-    dance_one(dance.request(constrained=True), song, Outputs(paths=output, format=dance.format, rig=dance.rig), constraints)
+    dance_one(dance.request(constrained=True), song, dance.outputs(output), constraints)

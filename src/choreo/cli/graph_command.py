@@ -8,7 +8,7 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, Outputs, dance_one, dancing_command
+from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, dance_one, dancing_command
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -49,7 +49,7 @@ def graph_dance(
       choreo graph song.mp3 -o dance.bvh --warp-smoothing 0      # the paper's raw warps
     """
     request = dance.request(repertoire=repertoire)
-    dance_one(request, song, Outputs(paths=output, format=dance.format, rig=dance.rig, preview=preview))
+    dance_one(request, song, dance.outputs(output, preview))
 
 
 @graph_app.command("build")
