@@ -20,7 +20,7 @@ CLIP_FRAMES = 8 * FPS  # repertoire clips are 8 s; their middle 4 s carry the st
 NUM_JOINTS = 24
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class StyleConfig:
     """Music and motion style encoders (paper 3.1) and the motion-beat-count predictor."""
 
@@ -37,7 +37,7 @@ class StyleConfig:
     temperature: float = 1.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TempoConfig:
     """Tempo-density estimators (paper 3.2)."""
 
@@ -110,7 +110,7 @@ class TrainOptions:
         return {"steps": config.style_steps, "batch_size": config.batch_size, "seed": config.seed}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrainConfig:
     batch_size: int = 32
     learning_rate: float = 1e-3
@@ -121,7 +121,7 @@ class TrainConfig:
     seed: int = 0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ModelConfig:
     style: StyleConfig = field(default_factory=StyleConfig)
     tempo: TempoConfig = field(default_factory=TempoConfig)
@@ -134,4 +134,4 @@ class ModelConfig:
         style = dict(data["style"])
         for key in ("music_channels", "motion_channels"):
             style[key] = tuple(style[key])
-        return cls(StyleConfig(**style), TempoConfig(**data["tempo"]))
+        return cls(style=StyleConfig(**style), tempo=TempoConfig(**data["tempo"]))

@@ -14,7 +14,7 @@ CONTACT_SOURCES = ("predicted", "target")  # whose foot contacts the foot term p
 PREDICTIONS = ("x0", "v")  # what the network outputs: x0 itself (EDGE), or v, turned into x0 (model.py)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ModelConfig:
     frame_dim: int = FRAME_DIM  # 4 contacts | 3 root | 24 x 6D
     music_dim: int = FEATURE_DIM  # the 35-d features; FEATURE_DIM + RHYTHM_DIM adds beat phase and tempo (`--rhythm`)
@@ -49,7 +49,7 @@ class ModelConfig:
             raise ValueError("latent_dim / num_heads must be an even integer (rotary embeddings)")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DiffusionConfig:
     timesteps: int = 1000
     cosine_offset: float = 0.008  # s in Nichol & Dhariwal's cosine schedule
@@ -86,7 +86,7 @@ class DiffusionConfig:
                 raise ValueError(f"{name} must be in [0, 1), got {getattr(self, name)}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrainConfig:
     batch_size: int = 32
     learning_rate: float = 4e-4

@@ -23,8 +23,9 @@ from choreo_graph.warp import STEPS, subsequence_dtw, warp_frames
 
 REPO = Path(__file__).resolve().parents[2]
 SONG = REPO / "examples" / "drum_and_bass_174bpm.wav"
-TINY = ModelConfig(StyleConfig(style_dim=8, music_channels=(4, 4, 4, 4), motion_channels=(4, 4, 4, 4), gru_hidden=8,
-                               gru_layers=1, beat_hidden=8), TempoConfig(width=8, content_dim=8, heads=2, music_layers=1))
+TINY = ModelConfig(style=StyleConfig(style_dim=8, music_channels=(4, 4, 4, 4), motion_channels=(4, 4, 4, 4), gru_hidden=8,
+                                     gru_layers=1, beat_hidden=8),
+                   tempo=TempoConfig(width=8, content_dim=8, heads=2, music_layers=1))
 
 
 def swaying_dance(seconds=20.0, fps=30, phase=0.0, speed=1.0) -> Motion:

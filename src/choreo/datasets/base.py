@@ -38,7 +38,7 @@ class Clip:
             )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class WindowConfig:
     seconds: float = 5.0  # window length (EDGE and SGMD train and score 5 s windows)
     stride_seconds: float = 0.5  # hop between window starts; 2.5 s for evaluation

@@ -37,7 +37,7 @@ from ..skeleton import SMPL24, Skeleton, forward_kinematics_torch, matrix_to_qua
 IDENTITY_6D = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class IKConfig:
     """Knobs of the refinement; the defaults fit M2D to ~1-2 cm at ~2.5 ms per frame on one core."""
 

@@ -36,7 +36,7 @@ from ..motion import Motion, positions_at
 ON_TARGET_FRAMES = 1  # a locked beat counts as landed within this many frames of its music beat
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BeatLockConfig:
     min_speed: float = 0.75  # the slowest local playback speed of the dance
     max_speed: float = 1.33  # the fastest

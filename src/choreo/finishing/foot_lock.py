@@ -28,7 +28,7 @@ LEFT_FOOT_JOINTS, RIGHT_FOOT_JOINTS = (7, 10), (8, 11)  # ankle and toe in SMPL-
 HORIZONTAL = np.array([1.0, 0.0, 1.0])  # Y is up: only x and z are corrected
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FootLockConfig:
     speed_threshold: float = 0.6  # m/s: a foot joint slower than this is planted
     recovery_seconds: float = 0.65  # time constant of the return to the original path

@@ -30,7 +30,7 @@ REAL_PACE = {"cha-cha": 0.448, "rumba": 0.443, "tango": 1.227, "waltz": 0.497}
 ANY_GENRE_PACE = 0.494
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PaceConfig:
     max_scale: float = 1.25  # the travel is scaled by at most this, or at least its inverse
     min_seconds: float = 30.0  # shorter dances are left alone: over a few seconds real dancers keep no one pace

@@ -20,7 +20,7 @@ from ..motion import Motion
 from ..motion.filters import fixed_weights, low_pass
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class RootPathConfig:
     cutoff_hz: float = 3.0  # slower travel is kept: whole-body jerk nearest real dancers' (docs/results.md, "Whole songs")
     blend_seconds: float = 0.3  # fade of the correction next to frames a user fixed

@@ -26,7 +26,7 @@ REAL_JOINT_SPEED = 10.39  # m/s: real M2D's fastest 0.1 % of frames (any joint) 
 REAL_FLOOR_STEP = 0.123  # metres of root travel on the floor per frame at 30 fps (99.9th percentile)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SpeedLimitConfig:
     joint_speed: float = REAL_JOINT_SPEED
     floor_step: float = REAL_FLOOR_STEP  # per frame at 30 fps

@@ -30,7 +30,7 @@ GIF_MAX_FPS = 15.0  # GIF frame delays are in hundredths of a second; more frame
 MIN_SIDE, MAX_SIDE, MAX_STRIP = 16, 7680, 64
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class RenderConfig:
     width: int = 640
     height: int = 480
@@ -72,7 +72,7 @@ def write_video(motion: Motion, path: Path, config: RenderConfig, music: str | N
     if fps != motion.fps:
         motion = motion.resample(fps)
     width, height = config.width // 2 * 2, config.height // 2 * 2  # H.264 wants even sizes
-    config = RenderConfig(width, height, fps, config.strip_frames, config.camera)
+    config = RenderConfig(width=width, height=height, fps=fps, strip_frames=config.strip_frames, camera=config.camera)
     with atomic_path(path) as temporary, tempfile.TemporaryFile() as log:
         command = [ffmpeg_executable(), "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
                    "-s", f"{width}x{height}", "-r", f"{fps:g}", "-i", "pipe:0"]
