@@ -11,6 +11,7 @@ from choreo.skeleton import Skeleton
 
 
 def short_random_motion(frames=20, fps=30.0, seed=0, scale=0.4):
+    """Smooth random rotations: cumulative small steps keep consecutive frames close, like real motion."""
     rng = np.random.default_rng(seed)
     axis_angle = np.cumsum(rng.normal(scale=scale / 10, size=(frames, 24, 3)), axis=0)
     root = np.cumsum(rng.normal(scale=0.01, size=(frames, 3)), axis=0) + [0, 0.9, 0]

@@ -18,11 +18,7 @@ from tests.motion.helpers import counting_motion, exactly, gram_schmidt, short_r
 
 
 def random_motion(frames=60, fps=30.0, seed=0, scale=0.4):
-    rng = np.random.default_rng(seed)
-    # Smooth random rotations: cumulative small steps keep consecutive frames close, like real motion.
-    axis_angle = np.cumsum(rng.normal(scale=scale / 10, size=(frames, 24, 3)), axis=0)
-    root = np.cumsum(rng.normal(scale=0.01, size=(frames, 3)), axis=0) + [0, 0.9, 0]
-    return Motion.from_axis_angle(root, axis_angle, fps=fps)
+    return short_random_motion(frames, fps, seed, scale)
 
 
 def test_rest_motion_stands_on_the_floor():
