@@ -35,11 +35,11 @@ def flag_parameters(options_type: type, defaults: dict | None = None, given_only
 def given_values(options_type: type, values: dict[str, Any]) -> dict[str, Any]:
     """The flag fields of ``options_type`` taken out of ``values`` (a command's arguments), those
     not given left out; comma lists become tuples of numbers."""
-    given = {}
+    hints, given = typing.get_type_hints(options_type), {}
     for f in flag_fields(options_type):
         value = values.pop(f.name)
         if value is not None:
-            given[f.name] = _numbers(_flag_name(f), value) if _is_tuple(f.type) else value
+            given[f.name] = _numbers(_names(f)[0], value) if _base_type(hints[f.name]) is tuple else value
     return given
 
 
@@ -58,8 +58,7 @@ def _parameter(f: Field, hint, shown_default, given_only: bool, panel: str | Non
     shown_default = default if default is not None else shown_default
     default = None if given_only else default
     kind = _base_type(hint)
-    names = flag.names or ((f"--{f.name.replace('_', '-')}/--no-{f.name.replace('_', '-')}",) if kind is bool
-                           else (f"--{f.name.replace('_', '-')}",))
+    names = _names(f, kind)
     shown = flag.default_text or (None if shown_default is None else _shown(shown_default))
     help_text = flag.help + (f" \\[default: {shown}]" if default is None and shown is not None else "")
     extra: dict[str, Any] = {}
@@ -67,7 +66,7 @@ def _parameter(f: Field, hint, shown_default, given_only: bool, panel: str | Non
         extra["parser"] = Number(names[0].split("/")[0])
     if flag.existing_file:
         kind, extra = Path, {"exists": True, "dir_okay": False}
-    if _is_tuple(hint):
+    if kind is tuple:  # a comma list, read by given_values
         kind = str
     option = typer.Option(default, *names, help=help_text, show_default=default is not None, rich_help_panel=panel, **extra)
     return inspect.Parameter(f.name, inspect.Parameter.KEYWORD_ONLY, default=option,
@@ -81,12 +80,10 @@ def _base_type(hint):
     return typing.get_origin(hint) or hint
 
 
-def _is_tuple(hint) -> bool:
-    return "tuple[" in str(hint)
-
-
-def _flag_name(f: Field) -> str:
-    return (f.metadata[FLAG].names or (f"--{f.name.replace('_', '-')}",))[0].split("/")[0]
+def _names(f: Field, kind: type | None = None) -> tuple[str, ...]:
+    """The flag's names: its own, or --field-name (a bool: --field-name/--no-field-name)."""
+    dashed = f.name.replace("_", "-")
+    return f.metadata[FLAG].names or ((f"--{dashed}/--no-{dashed}",) if kind is bool else (f"--{dashed}",))
 
 
 def _shown(value) -> str:
