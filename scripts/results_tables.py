@@ -58,7 +58,9 @@ GUIDANCE = [("1", "sgmd-guidance-1-seed-1"), ("1.5 (seeds 0-2)", "sgmd-guidance-
             ("2 (seeds 0-2)", "sgmd-guidance-2-no-pace"), ("2.5 (before)", "sgmd-guidance-2.5-seed-1")]
 OUTSIDE = [("SGMD", "sgmd"), ("ChoreoGraph", "graph")]
 VALIDATION = [("1.5", "validation-step10000-guidance-1.5"), ("2 (the default)", "validation-step10000-guidance-2"),
-              ("2.5", "validation-step10000-guidance-2.5")]
+              ("2.5", "validation-step10000-guidance-2.5"),
+              ("1.5, seeds 3-5", "validation-step10000-guidance-1.5-seeds-3-5"),
+              ("2, seeds 3-5", "validation-step10000-guidance-2-seeds-3-5")]
 
 
 @cache
