@@ -60,7 +60,8 @@ OUTSIDE = [("SGMD", "sgmd"), ("ChoreoGraph", "graph")]
 VALIDATION = [("1.5", "validation-step10000-guidance-1.5"), ("2 (the default)", "validation-step10000-guidance-2"),
               ("2.5", "validation-step10000-guidance-2.5"),
               ("1.5, seeds 3-5", "validation-step10000-guidance-1.5-seeds-3-5"),
-              ("2, seeds 3-5", "validation-step10000-guidance-2-seeds-3-5")]
+              ("2, seeds 3-5", "validation-step10000-guidance-2-seeds-3-5"),
+              ("1.5, step 12,000", "validation-step12000-guidance-1.5"), ("2, step 12,000", "validation-step12000-guidance-2")]
 
 
 @cache
