@@ -95,6 +95,18 @@ def test_convert_bvh_to_npz_and_back(tmp_path, capsys):
     np.testing.assert_allclose(again.joint_positions()[::2], motion.joint_positions(), atol=1e-4)
 
 
+def test_convert_moves_the_travel_onto_a_root_bone_and_back(tmp_path, capsys):
+    motion = write_dance(tmp_path / "dance.bvh")
+    assert run_cli(capsys, "convert", tmp_path / "dance.bvh", tmp_path / "root.bvh", "--root-motion", "--rig", "mixamo")[0] == 0
+    assert "ROOT root\n" in (tmp_path / "root.bvh").read_text()
+    assert run_cli(capsys, "convert", tmp_path / "root.bvh", tmp_path / "back.npz")[0] == 0
+    from choreo.formats import read_motion
+
+    np.testing.assert_allclose(read_motion(tmp_path / "back.npz").joint_positions(), motion.joint_positions(), atol=1e-4)
+    code, _, err = run_cli(capsys, "convert", tmp_path / "dance.bvh", tmp_path / "root.npy", "--root-motion")
+    assert code == 2 and "--root-motion applies to" in err and not (tmp_path / "root.npy").exists()
+
+
 def test_convert_to_stdout(tmp_path, capsys):
     write_dance(tmp_path / "dance.bvh")
     code, out, _ = run_cli(capsys, "convert", tmp_path / "dance.bvh", "-", "--format", "bvh")

@@ -125,3 +125,26 @@ def test_in_place_takes_the_travel_out_of_every_written_file(tmp_path, tiny_chec
         track = ground_track(still.root_positions, still.fps)
         assert np.linalg.norm(track - track[0], axis=-1).max() <= 0.02, name
         np.testing.assert_allclose(still.root_positions[:, 1], travel.root_positions[:, 1], atol=1e-4)
+
+
+def test_root_motion_puts_the_travel_on_a_root_bone_in_every_written_file(tmp_path, tiny_checkpoint):
+    from choreo.formats import read_bvh_raw
+
+    common = ["generate", str(SONG), "--checkpoint", str(tiny_checkpoint), "--steps", "2", "--threads", "1"]
+    assert main([*common, "-o", str(tmp_path / "plain.npz")]) == 0
+    assert main([*common, "-o", str(tmp_path / "root.bvh"), "-o", str(tmp_path / "root.glb"), "--root-motion"]) == 0
+    plain = read_motion(tmp_path / "plain.npz")
+    assert [joint.name for joint in read_bvh_raw(tmp_path / "root.bvh").joints[:2]] == ["root", "pelvis"]
+    for name in ("root.bvh", "root.glb"):  # the same dance, read back through the root bone
+        assert np.abs(read_motion(tmp_path / name).joint_positions() - plain.joint_positions()).max() < 1e-3, name
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["-o", "d.npz"], "--root-motion applies to .bvh, .glb, .fbx outputs, not .npz"),
+    (["-o", "d.bvh", "--in-place"], "--in-place and --root-motion exclude each other"),
+])
+def test_root_motion_that_cannot_be_written_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch, extra, words):
+    monkeypatch.chdir(tmp_path)
+    assert main(["generate", str(SONG), "--root-motion", *extra]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and words in err and not list(tmp_path.iterdir())

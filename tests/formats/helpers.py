@@ -52,9 +52,13 @@ def file_forward_kinematics(data):
                 if c.endswith("position"):
                     base[:, "xyz".index(c[0])] += values[:, k]
             world[j], positions[j] = local, base
-        else:
+        else:  # a position channel stands for the offset on its axis (a root bone's pelvis has them)
             p = joint.parent
-            positions[j] = positions[p] + world[p] @ joint.offset
+            offset = np.tile(joint.offset, (frames, 1))
+            for k, c in enumerate(joint.channels):
+                if c.endswith("position"):
+                    offset[:, "xyz".index(c[0])] = values[:, k]
+            positions[j] = positions[p] + np.einsum("tij,tj->ti", world[p], offset)
             world[j] = world[p] @ local
         if joint.end_site is not None:
             tips[j] = positions[j] + world[j] @ joint.end_site

@@ -18,13 +18,15 @@ from choreo.errors import ChoreoError, MotionFormatError
 from choreo.formats import (
     bvh,
     parse_bvh,
+    read_bvh_raw,
     read_motion,
     write_motion,
 )
 from choreo.formats.bvh import detect_scale, write_bvh
 from choreo.motion import Motion
 from choreo.skeleton import SMPL24, Skeleton, continuous_euler, euler_to_matrix, matrix_to_euler
-from tests.formats.helpers import TOLERANCE, J, max_joint_error, random_motion, save, still
+from tests.conftest import wandering_dance
+from tests.formats.helpers import TOLERANCE, J, file_forward_kinematics, max_joint_error, random_motion, save, still
 from tests.formats.hostile import hostile_dance, peak_bytes
 
 
@@ -607,3 +609,37 @@ def test_a_bvh_is_written_a_chunk_of_frames_at_a_time(tmp_path, monkeypatch):
         stored = peak_bytes(write_npz, motion, npz)
     assert (tmp_path / "dance.bvh").read_bytes() == (tmp_path / "whole.bvh").read_bytes()
     assert streamed < stored and streamed < at_once / 3  # measured: 5.5, 21 and 24 MB
+
+
+# -- root motion: a root bone above the pelvis ---------------------------------------------------
+def test_a_root_motion_file_moves_the_pelvis_under_a_floor_level_root_bone(tmp_path):
+    dancer = wandering_dance(4, 90)
+    path = tmp_path / "root.bvh"
+    write_motion(dancer, path, root_motion=True)
+    data = read_bvh_raw(path)
+    names = [joint.name for joint in data.joints]
+    assert names[:2] == ["root", "pelvis"] and len(names) == 25 and data.joints[1].parent == 0
+    assert len(data.joints[0].channels) == len(data.joints[1].channels) == 6
+    assert all(len(joint.channels) == 3 for joint in data.joints[2:])
+    positions, _ = file_forward_kinematics(data)  # a literal reading of the file, position channels and all
+    ours = dancer.joint_positions()
+    for j, name in enumerate(SMPL24.names):
+        assert np.abs(positions[names.index(name)] - ours[:, j]).max() < 1e-4, name
+    floor = np.median(ours[..., 1].min(axis=1))
+    assert np.abs(positions[0][:, 1] - floor).max() < 1e-5
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the pelvis's position channels are read, not ignored
+        back = read_motion(path)
+    assert back.skeleton.same_topology(SMPL24) and back.num_frames == 90
+    assert np.abs(back.joint_positions() - ours).max() < 1e-4
+    np.testing.assert_allclose(back.skeleton.offsets[1:], dancer.skeleton.offsets[1:], atol=1e-6)
+
+
+def test_joints_choreo_cannot_place_are_refused_unless_they_stand_above_the_pelvis(dance):
+    text = smpl_text(dance)  # a joint without channels below the left foot: not a root bone
+    extra = text.replace("\tEnd Site", "\tJOINT hat\n\t{\n\tOFFSET 0 0.1 0\n\t}\n\tEnd Site", 1)
+    with pytest.raises(MotionFormatError) as error:
+        bvh.bvh_to_motion(bvh.parse_bvh(extra), "x.bvh")
+    assert str(error.value).startswith("x.bvh: skeleton is not SMPL-24 (found 25 joints: ")
+    above = "HIERARCHY\nROOT stage\n{\nOFFSET 0 0 0\n" + text.replace("HIERARCHY\nROOT", "JOINT", 1).replace("MOTION", "}\nMOTION", 1)
+    np.testing.assert_allclose(bvh.bvh_to_motion(bvh.parse_bvh(above)).joint_positions(), dance.joint_positions(), atol=1e-5)

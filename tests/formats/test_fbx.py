@@ -44,13 +44,14 @@ def to_blender(positions: np.ndarray) -> np.ndarray:
     return np.stack([positions[..., 0], -positions[..., 2], positions[..., 1]], axis=-1)
 
 
-@pytest.fixture(scope="module", params=["smpl", "mixamo"])
+@pytest.fixture(scope="module", params=["smpl", "mixamo", "smpl root motion", "mixamo root motion"])
 def seen(request, motion, tmp_path_factory):
     if blender_command() is None:
         pytest.skip("neither Blender nor bpy is installed")
-    folder = tmp_path_factory.mktemp(f"fbx_{request.param}")
+    rig, root_motion = request.param.split()[0], request.param.endswith("root motion")
+    folder = tmp_path_factory.mktemp(f"fbx_{rig}")
     path = folder / "dance.fbx"
-    write_fbx(motion, path, rig=None if request.param == "smpl" else request.param)
+    write_fbx(motion, path, rig=None if rig == "smpl" else rig, root_motion=root_motion)
     assert path.read_bytes().startswith(b"Kaydara FBX Binary")
     return request.param, blender_view(path, folder / "seen.json")
 
@@ -58,10 +59,13 @@ def seen(request, motion, tmp_path_factory):
 @needs_blender
 def test_bones_hierarchy_and_frames(seen):
     rig, view = seen
-    if rig == "smpl":
+    if rig.startswith("smpl"):
         names, parents = list(JOINT_NAMES), {n: (None if p < 0 else JOINT_NAMES[p]) for n, p in zip(JOINT_NAMES, SMPL24.parents)}
     else:
         names, parents = list(MIXAMO.bones), {n: (None if p < 0 else MIXAMO.bones[p]) for n, p in zip(MIXAMO.bones, MIXAMO.parents)}
+    if rig.endswith("root motion"):  # a root bone above the hips
+        parents = {**parents, names[0]: "root", "root": None}
+        names = ["root", *names]
     assert len(view["bones"]) == len(names) and set(view["bones"]) == set(names)  # no added leaf bones
     assert dict(zip(view["bones"], view["parents"])) == parents
     assert view["frame_end"] - view["frame_start"] + 1 == FRAMES and view["frame_start"] == 1  # our frame 0 at time 0
@@ -73,10 +77,17 @@ def test_bones_hierarchy_and_frames(seen):
 def test_joint_positions_within_a_centimetre(seen, motion):
     rig, view = seen
     ours = motion.joint_positions()
-    joints = [JOINT_NAMES.index(n) if rig == "smpl" else MIXAMO.smpl_joints[MIXAMO.bones.index(n)] for n in view["bones"]]
+    bones = [k for k, name in enumerate(view["bones"]) if name != "root"]
+    joints = [JOINT_NAMES.index(n) if rig.startswith("smpl") else MIXAMO.smpl_joints[MIXAMO.bones.index(n)]
+              for n in (view["bones"][k] for k in bones)]
     heads = np.array(view["heads"])  # (frames, bones, 3), Blender's Z-up metres
-    error = np.abs(heads - to_blender(ours[:, joints])).max()
+    error = np.abs(heads[:, bones] - to_blender(ours[:, joints])).max()
     assert error < 0.01, error
+    if "root" in view["bones"]:  # at floor level, where the feet are, carrying the travel
+        root = heads[:, view["bones"].index("root")]
+        assert np.abs(root[:, 2] - np.median(ours[..., 1].min(axis=1))).max() < 0.01
+        hips = heads[:, bones[joints.index(0)]]
+        assert np.linalg.norm(root[:, :2] - hips[:, :2], axis=-1).max() < 0.5
 
 
 @needs_blender
@@ -84,7 +95,7 @@ def test_rest_pose_stands_on_the_floor_in_the_rigs_rest(seen, motion):
     """The FBX's static pose (what engines take as rest) is the rig's rest, not the first frame."""
     rig, view = seen
     rest = dict(zip(view["bones"], np.array(view["rest_heads"])))
-    if rig == "smpl":
+    if rig.startswith("smpl"):
         expected = to_blender(motion.skeleton.rest_positions())
         got = np.array([rest[name] for name in JOINT_NAMES])
         np.testing.assert_allclose(got - got[0], expected, atol=1e-4)
@@ -221,7 +232,7 @@ def test_write_fbx_messages(monkeypatch, tmp_path):
 def test_write_fbx_stream_passes_its_rig_and_copies_the_file(monkeypatch):
     seen = []
 
-    def fake_write_fbx(motion, path, rig=None):
+    def fake_write_fbx(motion, path, rig=None, root_motion=False):
         seen.append((Path(path), rig))
         Path(path).write_bytes(b"FBX-BYTES")
     monkeypatch.setattr(fbx, "write_fbx", fake_write_fbx)

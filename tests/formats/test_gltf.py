@@ -63,6 +63,14 @@ def glb_path(motion, tmp_path_factory):
     return path
 
 
+@pytest.fixture(scope="module")
+def root_motion_glb(motion, tmp_path_factory):
+    path = tmp_path_factory.mktemp("glb") / "root.glb"
+    with open(path, "wb") as handle:
+        write_glb(motion, handle, root_motion=True)
+    return path
+
+
 # -- an independent reading of the file ------------------------------------------------------
 def accessor(document, index):
     """Decode one accessor by hand from the glTF JSON and the binary chunk."""
@@ -166,6 +174,27 @@ def test_round_trip_through_our_reader(glb_path, motion):
     np.testing.assert_allclose(back.skeleton.offsets[1:], motion.skeleton.offsets[1:], atol=1e-6)
 
 
+def test_root_motion_puts_a_floor_level_root_bone_in_the_skin_above_the_pelvis(root_motion_glb, motion):
+    document = load(root_motion_glb)
+    assert [node.name for node in document.nodes[:25]] == ["root", *JOINT_NAMES] and document.nodes[0].children == [1]
+    assert document.skins[0].joints == list(range(25)) and sorted(document.scenes[0].nodes) == [0, 25]
+    targets = {(c.target.node, c.target.path) for c in document.animations[0].channels}
+    assert targets == {(0, "translation"), (1, "translation")} | {(j, "rotation") for j in range(25)}
+    ours = motion.joint_positions()
+    floor = np.median(ours[..., 1].min(axis=1))
+    for frame in (0, FRAMES // 2, FRAMES - 1):
+        worlds = node_worlds(document, frame)
+        assert np.abs(worlds[1:25, :3, 3] - ours[frame]).max() < 1e-3, frame
+        assert abs(worlds[0, 1, 3] - floor) < 1e-5
+    rest = node_worlds(document)  # the bind pose stands on the floor, the root bone under the pelvis
+    np.testing.assert_allclose(rest[0, :3, 3], 0.0)
+    assert rest[1:25, 1, 3].min() == pytest.approx(0.0, abs=1e-6)
+    attributes = document.meshes[0].primitives[0].attributes
+    assert 0 not in accessor(document, attributes.JOINTS_0)[:, 0]  # no body part hangs on the root bone
+    back = read_glb(root_motion_glb)
+    assert np.abs(back.joint_positions() - ours).max() < 1e-4
+
+
 def test_writer_refuses_other_skeletons_and_reader_damaged_files(tmp_path, motion):
     other = SMPL24.__class__(JOINT_NAMES[:23], SMPL24.parents[:23], SMPL24.offsets[:23])
     with pytest.raises(MotionFormatError):
@@ -215,21 +244,25 @@ def validator_environment():
     return node, env
 
 
-def test_khronos_validator_finds_no_errors_or_warnings(glb_path, tmp_path):
+@pytest.mark.parametrize("written", ["glb_path", "root_motion_glb"])
+def test_khronos_validator_finds_no_errors_or_warnings(written, request, tmp_path):
     node, env = validator_environment()
     script = tmp_path / "validate.js"
     script.write_text(VALIDATE_JS)
-    done = subprocess.run([node, str(script), str(glb_path)], env=env, capture_output=True, text=True, timeout=120)
+    path = request.getfixturevalue(written)
+    done = subprocess.run([node, str(script), str(path)], env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     issues = json.loads(done.stdout)
     assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
 
 
 # -- Blender ---------------------------------------------------------------------------------
-def test_blender_imports_our_glb_exactly(glb_path, motion, tmp_path):
+@pytest.mark.parametrize("written", ["glb_path", "root_motion_glb"])
+def test_blender_imports_our_glb_exactly(written, request, motion, tmp_path):
     blender = shutil.which("blender")
     if not blender:
         pytest.skip("Blender is not installed")
+    glb_path = request.getfixturevalue(written)
     numpy_dir = str(Path(np.__file__).parent.parent)  # Debian's Blender glTF importer needs numpy
     result = subprocess.run([blender, "--background", "--factory-startup", "--python-exit-code", "1",
                              "--python", str(BLENDER_SCRIPT), "--", str(glb_path), str(FPS),
@@ -237,14 +270,19 @@ def test_blender_imports_our_glb_exactly(glb_path, motion, tmp_path):
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0 and (tmp_path / "seen.json").exists(), result.stdout[-2000:] + result.stderr[-2000:]
     seen = json.loads((tmp_path / "seen.json").read_text())
-    assert len(seen["bones"]) == 24 and set(seen["bones"]) == set(JOINT_NAMES)
+    bones = list(JOINT_NAMES) + (["root"] if written == "root_motion_glb" else [])
+    assert len(seen["bones"]) == len(bones) and set(seen["bones"]) == set(bones)
     assert seen["frame_end"] - seen["frame_start"] + 1 == FRAMES
     skinned = [mesh for mesh in seen["meshes"] if mesh["deformed_by"]]
-    assert len(skinned) == 1 and skinned[0]["groups"] == 24 and skinned[0]["vertices"] > 0
-    heads = np.array(seen["heads"])  # (frames, 24, 3), Blender's Z-up: (x, y, z) = (x, -z, y) in ours
-    ours = motion.joint_positions()[:, [JOINT_NAMES.index(name) for name in seen["bones"]]]
+    assert len(skinned) == 1 and skinned[0]["groups"] >= 24 and skinned[0]["vertices"] > 0
+    heads = np.array(seen["heads"])  # (frames, bones, 3), Blender's Z-up: (x, y, z) = (x, -z, y) in ours
+    joints = [k for k, name in enumerate(seen["bones"]) if name in JOINT_NAMES]
+    ours = motion.joint_positions()[:, [JOINT_NAMES.index(seen["bones"][k]) for k in joints]]
     ours_in_blender = np.stack([ours[..., 0], -ours[..., 2], ours[..., 1]], axis=-1)
-    assert np.abs(heads - ours_in_blender).max() < 1e-3  # under a millimetre
+    assert np.abs(heads[:, joints] - ours_in_blender).max() < 1e-3  # under a millimetre
+    if "root" in seen["bones"]:  # on the floor, where the feet are
+        floor = np.median(motion.joint_positions()[..., 1].min(axis=1))
+        assert np.abs(heads[:, seen["bones"].index("root"), 2] - floor).max() < 1e-3
 
 
 # -- glTF --------------------------------------------------------------------------------------

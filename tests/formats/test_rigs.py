@@ -606,3 +606,17 @@ def test_rig_file_composes_two_joints_above_the_hips(tmp_path):
     names = [joint.name for joint in data.joints]
     for b, bone in enumerate(MIXAMO.bones):
         np.testing.assert_allclose(back[:, MIXAMO.smpl_joints[b]], positions[names.index(bone)], atol=1e-6)
+
+
+def test_root_motion_on_the_rig_puts_a_root_bone_above_the_hips(motion, tmp_path):
+    path = written(motion, tmp_path, root_motion=True)
+    raw = read_bvh_raw(path)
+    assert [joint.name for joint in raw.joints] == ["root", *MIXAMO.bones]
+    assert raw.joints[1].parent == 0 and len(raw.joints[1].channels) == 6
+    positions, _ = file_forward_kinematics(raw)
+    ours = motion.joint_positions()
+    for b, name in enumerate(MIXAMO.bones, start=1):
+        assert np.abs(positions[b] - ours[:, MIXAMO.smpl_joints[b - 1]]).max() < 1e-4, name
+    assert np.ptp(positions[0][:, 1]) < 1e-9  # the root bone keeps to the floor
+    back = read_bvh_rig(path)
+    assert np.abs(back.joint_positions() - ours).max() < 1e-4

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from .dancing import BEAT_TRACKER, BEATS, BPM, IN_PLACE
+from .dancing import BEAT_TRACKER, BEATS, BPM, IN_PLACE, ROOT_MOTION
 from .numbers import Number
 from .progress import progress_bar, stderr_console, stdout_console
 from .text import markup
@@ -98,7 +98,7 @@ def convert(
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
     fps: Optional[float] = typer.Option(None, parser=Number("--fps"), help="Resample to this frame rate."),
     rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo."),
-    in_place: bool = IN_PLACE,
+    in_place: bool = IN_PLACE, root_motion: bool = ROOT_MOTION,
 ) -> None:
     """Convert a motion between BVH, NPZ, AIST++ pkl, JSON, joint-position .npy, glTF (.glb) and FBX.
 
@@ -108,16 +108,18 @@ def convert(
       choreo convert dance.bvh - --format json | head
       choreo convert dance.bvh dance.fbx --rig mixamo      # FBX needs Blender
       choreo convert dance.bvh idle.glb --in-place --fps 60  # for a game engine
+      choreo convert dance.bvh dance.fbx --rig mixamo --root-motion  # Unreal's root motion
     """
     from ..formats import check_output_format, read_motion, write_motion
-    from ..motion.delivery import delivered
+    from ..motion.delivery import check_travel, delivered
     from ..motion.motion import MAX_FPS, MIN_FPS
 
     fps = Number("--fps", MIN_FPS, MAX_FPS)(fps)  # before resampling allocates the frames (inf, 1e6)
-    check_output_format(target, format, rig)  # a bad target or rig refused before reading anything
+    check_travel(in_place, root_motion)
+    check_output_format(target, format, rig, root_motion)  # a bad target or rig refused before reading anything
     motion = read_motion(_require_file(source))
     motion = delivered(motion, fps, in_place)
-    written = write_motion(motion, target, format=format, rig=rig)
+    written = write_motion(motion, target, format=format, rig=rig, root_motion=root_motion)
     if target != "-":
         stderr_console.print(f"wrote {markup(written)} ({motion.num_frames} frames at {motion.fps:g} fps)",
                              highlight=False)

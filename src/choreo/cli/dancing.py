@@ -36,6 +36,8 @@ FPS = typer.Option(None, "--fps", parser=Number("--fps"), help="Write the dance 
                    "(default: the backend's, 30): resampled after the finishing passes, so beats and steps keep their times.")
 IN_PLACE = typer.Option(False, "--in-place", help="Take the travel out: the dancer stays where it started, its sway, "
                         "height and facing kept (for a game engine that moves the character itself).")
+ROOT_MOTION = typer.Option(False, "--root-motion", help="Write .bvh/.glb/.fbx under a root bone at floor level that "
+                           "carries the travel and the facing, the hips moving relative to it (game engines' root motion).")
 BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
                             help="Who hears the beats: choreo (licence-clean) or madmom (pip install "
                                  "\"choreo\\[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
@@ -55,7 +57,7 @@ def shared_options(
     threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs "
                                           "this job may use that other work leaves idle; OMP_NUM_THREADS is honoured). "
                                           "Set it for bit-identical reruns: other thread counts round differently."),
-    fps: Optional[float] = FPS, in_place: bool = IN_PLACE,
+    fps: Optional[float] = FPS, in_place: bool = IN_PLACE, root_motion: bool = ROOT_MOTION,
 ) -> None:
     """The options every dancing command takes (its signature is what counts)."""
 
@@ -76,19 +78,21 @@ class DanceFlags:
     threads: int | None
     fps: float | None  # the files' frame rate; None: the dance's own
     in_place: bool  # the files without the travel
+    root_motion: bool  # the files with the travel on a root bone
     finishing: Finishing
     options: dict[str, Any]  # the backend option flags given; the rest: the backend's defaults
 
     def __post_init__(self):
-        if self.fps is not None:
-            from ..motion.delivery import check_fps
+        from ..motion.delivery import check_fps, check_travel
 
+        if self.fps is not None:
             check_fps(self.fps)
+        check_travel(self.in_place, self.root_motion)
 
     def outputs(self, paths: list[str], preview: bool = False, format: bool = True) -> "Outputs":
         """Where and how a song's dance is written (``format``: --format names one file's format)."""
         return Outputs(paths=paths, format=self.format if format else None, rig=self.rig, preview=preview,
-                       fps=self.fps, in_place=self.in_place)
+                       fps=self.fps, in_place=self.in_place, root_motion=self.root_motion)
 
     def request(self, constrained: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not
@@ -152,7 +156,7 @@ class Outputs:
     preview: bool = False  # also an MP4 with the music beside the first file
     fps: float | None = None  # written at this frame rate (choreo.motion.delivery.at_fps)
     in_place: bool = False  # written without the travel (choreo.motion.delivery.in_place)
-
+    root_motion: bool = False  # written under a root bone (choreo.motion.delivery.with_root_bone)
 
     def check(self) -> None:
         """Every output checked before any work or any file: a writable folder, a known format."""
@@ -165,7 +169,7 @@ class Outputs:
         for path in self.paths:
             if path != "-":
                 output_target(path)  # a writable folder, and nothing there that is not a regular file
-            check_output_format(path, self.format, self.rig)
+            check_output_format(path, self.format, self.rig, self.root_motion)
 
 
 def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints: Callable | None = None) -> dict:
@@ -193,7 +197,8 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
 
         video = str(Path(written[0]).with_suffix(".mp4"))
         companions[video] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
-    write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.rig, companions=companions)
+    write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.rig, companions=companions,
+                  root_motion=outputs.root_motion)
     written += list(companions)
     if written:
         kept = f", {fixed.describe()}" if fixed else ""

@@ -27,12 +27,14 @@ import numpy as np
 
 from ..errors import MotionFormatError
 from ..motion import Motion, source_name
+from ..motion.delivery import with_root_bone
 from ..motion.motion import frame_chunks
 from ..skeleton import (SMPL24, Skeleton, continuous_euler, elementary_rotation, euler_to_matrix, matrix_to_euler,
                         matrix_to_quaternion, quaternion_to_matrix)
 
 ROTATION_ORDER = "ZXY"
 UNIT_SCALE = {"m": 1.0, "cm": 100.0}
+ROOT_TIP = (0.0, 0.0, 0.2)  # a root bone's End Site for Blender (write_tree's root_tip): ahead, on the floor
 END_SITES = {  # short bones past the leaves so viewers draw a head, hands and toes
     "head": (0.0, 0.1, 0.0), "l_hand": (0.08, 0.0, 0.0), "r_hand": (-0.08, 0.0, 0.0),
     "l_foot": (0.0, 0.0, 0.06), "r_foot": (0.0, 0.0, 0.06),
@@ -65,18 +67,41 @@ class BvhData:
 
 
 # -- writing ---------------------------------------------------------------------------------
-def write_bvh(motion: Motion, handle, units: str = "m") -> None:
-    """Write ``motion`` (SMPL-24 topology) as BVH text to a binary handle."""
-    if units not in UNIT_SCALE:
-        raise MotionFormatError(f"unknown BVH units {units!r} (use m or cm)")
+def write_bvh(motion: Motion, handle, units: str = "m", root_motion: bool = False, root_tip: bool = False) -> None:
+    """Write ``motion`` (SMPL-24 topology) as BVH text to a binary handle; ``root_motion``: under a
+    floor-level root bone (choreo.motion.delivery.with_root_bone); ``root_tip``: see :func:`write_tree`."""
     if len(motion.skeleton.names) != 24 or motion.skeleton.parents != SMPL24.parents:
         raise MotionFormatError("BVH export supports the SMPL-24 skeleton only")
+    write_tree(motion, handle, units, root_motion=root_motion, root_tip=root_tip)
+
+
+def write_tree(motion: Motion, handle, units: str = "m", end_sites: dict | None = None, root_motion: bool = False,
+               root_tip: bool = False) -> None:
+    """Write ``motion`` on its own skeleton as BVH text: the root with position channels (and, with
+    ``root_motion``, a root bone above it, the dance's root then moving relative to the bone).
+    ``root_tip`` gives the root bone an End Site ahead of it, for Blender alone (the FBX path): its
+    importer then points the bone forward, not up at the hips, and its FBX importer does not fuse
+    the hips to a bone ending where they start (a fused bone loses its position keys)."""
+    if units not in UNIT_SCALE:
+        raise MotionFormatError(f"unknown BVH units {units!r} (use m or cm)")
     check_joint_names(motion.skeleton.names, "BVH")
+    positions = {0: motion.root_positions}
+    if root_motion:
+        motion, hips = with_root_bone(motion)
+        positions[1] = hips
+        end_sites = _leaf_tips(motion.skeleton) if end_sites is None else {j + 1: tip for j, tip in end_sites.items()}
+        end_sites = {0: ROOT_TIP, **end_sites} if root_tip else end_sites
     scale = UNIT_SCALE[units]
     text = io.StringIO()
-    _write_hierarchy(text, motion.skeleton, scale)
+    _write_hierarchy(text, motion.skeleton, scale, end_sites, translated=tuple(positions))
     handle.write(text.getvalue().encode())
-    _write_frames(handle, motion, scale)
+    _write_frames(handle, motion, scale, {j: p for j, p in positions.items() if j})
+
+
+def _leaf_tips(skeleton: Skeleton) -> dict:
+    """An End Site per leaf: END_SITES by name, a short bone up otherwise."""
+    return {j: END_SITES.get(skeleton.names[j], (0.0, 0.05, 0.0))
+            for j in range(len(skeleton.names)) if not skeleton.children(j)}
 
 
 def check_joint_names(names, format: str) -> None:
@@ -90,12 +115,12 @@ def check_joint_names(names, format: str) -> None:
                                     "names must be non-empty, printable, without spaces or braces")
 
 
-def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float, end_sites: dict | None = None) -> None:
+def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float, end_sites: dict | None = None,
+                     translated: tuple[int, ...] = (0,)) -> None:
     """The HIERARCHY block, children depth first; ``end_sites`` maps a joint index to its End Site
-    offset (default: every leaf, from END_SITES by name). Retargeted rigs pass their own."""
-    if end_sites is None:
-        end_sites = {j: END_SITES.get(skeleton.names[j], (0.0, 0.05, 0.0))
-                     for j in range(len(skeleton.names)) if not skeleton.children(j)}
+    offset (default: every leaf, from END_SITES by name). Retargeted rigs pass their own. The
+    ``translated`` joints get position channels (the root, and a dance's root under a root bone)."""
+    end_sites = _leaf_tips(skeleton) if end_sites is None else end_sites
     out.write("HIERARCHY\n")
     rotation_channels = " ".join(f"{axis}rotation" for axis in ROTATION_ORDER)
 
@@ -108,14 +133,14 @@ def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float, end_sit
         keyword = "ROOT" if skeleton.parents[j] < 0 else "JOINT"
         out.write(f"{pad}{keyword} {skeleton.names[j]}\n{pad}{{\n")
         out.write(f"{pad}\tOFFSET {vector(skeleton.offsets[j])}\n")
-        if keyword == "ROOT":
+        if j in translated:
             out.write(f"{pad}\tCHANNELS 6 Xposition Yposition Zposition {rotation_channels}\n")
         else:
             out.write(f"{pad}\tCHANNELS 3 {rotation_channels}\n")
+        if j in end_sites:  # before any child: where Blender's importer takes a tip for a joint that has both
+            out.write(f"{pad}\tEnd Site\n{pad}\t{{\n{pad}\t\tOFFSET {vector(end_sites[j])}\n{pad}\t}}\n")
         for child in skeleton.children(j):
             write_joint(child, depth + 1)
-        if j in end_sites:
-            out.write(f"{pad}\tEnd Site\n{pad}\t{{\n{pad}\t\tOFFSET {vector(end_sites[j])}\n{pad}\t}}\n")
         out.write(f"{pad}}}\n")
 
     write_joint(0, 0)
@@ -130,18 +155,25 @@ def _depth_first_order(skeleton: Skeleton) -> list[int]:
     return order
 
 
-def _write_frames(handle, motion: Motion, scale: float) -> None:
+def _write_frames(handle, motion: Motion, scale: float, translations: dict[int, np.ndarray] | None = None) -> None:
     """The MOTION block to a binary handle, a chunk of frames at a time: a long dance's rotation
-    matrices and text at once would hold gigabytes (the curves stay continuous across chunks)."""
+    matrices and text at once would hold gigabytes (the curves stay continuous across chunks).
+    ``translations``: (T, 3) positions of joints other than the root that have position channels,
+    in their parent's frame (a position channel stands for the offset, as Blender reads it)."""
     order = _depth_first_order(motion.skeleton)  # channels follow the hierarchy's listing order
+    translations = translations or {}
     handle.write(f"MOTION\nFrames: {motion.num_frames}\nFrame Time: {1.0 / motion.fps:.8f}\n".encode())
     previous = None
     for frames in frame_chunks(motion.num_frames):
         solved = matrix_to_euler(quaternion_to_matrix(motion.rotations[frames]), ROTATION_ORDER)
         angles = continuous_euler(solved, previous)  # (T, J, 3) radians
         previous = angles[-1]
-        values = np.concatenate([motion.root_positions[frames] * scale,
-                                 np.degrees(angles[:, order]).reshape(len(angles), -1)], axis=1)
+        degrees = np.degrees(angles)
+        columns = [motion.root_positions[frames] * scale]
+        for j in order:
+            columns += [translations[j][frames] * scale] if j in translations else []
+            columns.append(degrees[:, j])
+        values = np.concatenate(columns, axis=1)
         text = io.StringIO()
         np.savetxt(text, values, fmt="%.6f", delimiter=" ")
         handle.write(text.getvalue().encode())
@@ -348,8 +380,9 @@ def detect_scale(rest_positions: np.ndarray) -> float:
     return 1.0
 
 
-def _local_rotations(data: BvhData, warn: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """(T, J, 3, 3) local rotations and (T, 3) root positions in file units."""
+def _local_rotations(data: BvhData, warn: bool = True, translated=()) -> tuple[np.ndarray, np.ndarray]:
+    """(T, J, 3, 3) local rotations and (T, 3) root positions in file units. Position channels of
+    other joints are read by :func:`in_world` for the ``translated`` ones, ignored on the rest."""
     frames = len(data.values)
     rotmats = np.broadcast_to(np.eye(3), (frames, len(data.joints), 3, 3)).copy()
     root = np.tile(data.joints[0].offset, (frames, 1))
@@ -368,21 +401,65 @@ def _local_rotations(data: BvhData, warn: bool = True) -> tuple[np.ndarray, np.n
             for axis_index, axis in enumerate("xyz"):
                 if axis in position_channels:
                     root[:, axis_index] = values[:, position_channels[axis]] + joint.offset[axis_index]
-        elif position_channels:
+        elif position_channels and j not in translated:
             ignored_positions = True
     if ignored_positions and warn:
         warnings.warn("BVH position channels on non-root joints are ignored (bone offsets are used)")
     return rotmats, root
 
 
-def _local_quaternions(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
+def above(data: BvhData, joint: int) -> list[int]:
+    """The file's joints above ``joint``, from its parent up to the file's root."""
+    chain = []
+    while data.joints[joint].parent >= 0:
+        joint = data.joints[joint].parent
+        chain.append(joint)
+    return chain
+
+
+def _translation(data: BvhData, joint: int) -> np.ndarray:
+    """(T, 3) or (3,): where ``joint`` sits in its parent's frame, in file units: its position
+    channels stand for its offset on their axes (as Blender and most tools read them)."""
+    offset = np.asarray(data.joints[joint].offset, dtype=np.float64)
+    channels = data.joints[joint].channels
+    given = {c[0]: k for k, c in enumerate(channels) if c.endswith("position")}
+    if not given:
+        return offset
+    values = data.values[:, data.channel_slices()[joint]]
+    return np.stack([values[:, given[axis]] if axis in given else np.full(len(values), offset[a])
+                     for a, axis in enumerate("xyz")], axis=-1)
+
+
+def in_world(data: BvhData, rotations: np.ndarray, root: np.ndarray, joint: int) -> tuple[np.ndarray, np.ndarray]:
+    """(T, J, 3, 3) rotations with ``joint``'s own made world, and (T, 3) its world position.
+
+    A dance's root may sit under joints its skeleton does not name: a root bone for game engines'
+    root motion, or an exporter's "Armature" (often turned to change the up axis). Their
+    transforms are composed into the dance's root, so the dance keeps the file's world pose."""
+    chain = [joint, *above(data, joint)]
+    if len(chain) == 1:
+        return rotations, root
+    world, position = rotations[:, chain[-1]], root
+    for j in reversed(chain[:-1]):  # from below the file's root down to ``joint``
+        translation = np.broadcast_to(_translation(data, j), position.shape)
+        position = position + np.einsum("tij,tj->ti", world, translation)
+        world = world @ rotations[:, j]
+    rotations = rotations.copy()
+    rotations[:, joint] = world
+    return rotations, position
+
+
+def _local_quaternions(data: BvhData, dance_root: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """(T, J, 4) local rotations and (T, 3) root positions in file units, converted a block of
     frames at a time: the matrices and their intermediates for an hour at 120 fps would take
-    gigabytes, the quaternions a few hundred megabytes."""
+    gigabytes, the quaternions a few hundred megabytes. ``dance_root``'s is made world, with its
+    position (:func:`in_world`)."""
     frames = len(data.values)
     quaternions, root = np.empty((frames, len(data.joints), 4)), np.empty((frames, 3))
+    translated = above(data, dance_root)
     for block in frame_chunks(frames):
-        rotmats, root[block] = _local_rotations(BvhData(data.joints, data.frame_time, data.values[block]), block.start == 0)
+        part = BvhData(data.joints, data.frame_time, data.values[block])
+        rotmats, root[block] = in_world(part, *_local_rotations(part, block.start == 0, translated + [dance_root]), dance_root)
         quaternions[block] = matrix_to_quaternion(rotmats)
     return quaternions, root
 
@@ -408,20 +485,24 @@ def bvh_to_motion(data: BvhData, name: str = "BVH", units: str = "auto") -> Moti
             index[j] = SMPL_NAME_INDEX[key]
     if len(index) != 24:
         index = _index_by_tree(data) or index
-    if len(index) != 24 or len(data.joints) != 24:
+    pelvis = next((j for j, smpl in index.items() if smpl == 0), None)
+    unnamed = [j for j in range(len(data.joints)) if j not in index]
+    if len(index) != 24 or (unnamed and (pelvis is None or sorted(unnamed) != sorted(above(data, pelvis)))):
         listed = ", ".join(j.name for j in data.joints[:6]) + (", ..." if len(data.joints) > 6 else "")
         raise MotionFormatError(
             f"{name}: skeleton is not SMPL-24 (found {len(data.joints)} joints: {listed})")
-    to_smpl = np.array([index[j] for j in range(24)])
-    file_parents = [index[j.parent] if j.parent >= 0 else -1 for j in data.joints]
-    for j in range(24):
-        if file_parents[j] != SMPL24.parents[to_smpl[j]]:
+    joints = sorted(index)  # the file's SMPL joints; any above the pelvis (a root bone) are composed into it
+    to_smpl = np.array([index[j] for j in joints])
+    for j in joints:
+        parent = data.joints[j].parent
+        if index.get(parent, -1) != SMPL24.parents[index[j]]:
             raise MotionFormatError(f"{name}: joint {data.joints[j].name} has the wrong parent for SMPL-24")
-    quaternions_file, root = _local_quaternions(data)
+    quaternions_file, root = _local_quaternions(data, pelvis)
     offsets = np.zeros((24, 3))
-    quaternions = np.empty_like(quaternions_file)
-    offsets[to_smpl] = np.array([j.offset for j in data.joints])
-    quaternions[:, to_smpl] = quaternions_file
+    quaternions = np.empty((len(quaternions_file), 24, 4))
+    offsets[to_smpl] = np.array([data.joints[j].offset for j in joints])
+    offsets[0] = 0.0  # the pelvis's place is in the root's path (its offset and channels added, or composed)
+    quaternions[:, to_smpl] = quaternions_file[:, joints]
     del quaternions_file
     skeleton = SMPL24.with_offsets(offsets)
     scale = detect_scale(skeleton.rest_positions()) if units == "auto" else 1.0 / UNIT_SCALE[units]

@@ -52,8 +52,9 @@ def _numpy_dir() -> str:
     return str(Path(np.__file__).parent.parent)
 
 
-def write_fbx(motion: Motion, path: str | os.PathLike, rig: Rig | str | None = None) -> str:
-    """Write ``motion`` (SMPL-24) as FBX at ``path``, on SMPL-24 or retargeted onto ``rig`` ("mixamo")."""
+def write_fbx(motion: Motion, path: str | os.PathLike, rig: Rig | str | None = None, root_motion: bool = False) -> str:
+    """Write ``motion`` (SMPL-24) as FBX at ``path``, on SMPL-24 or retargeted onto ``rig`` ("mixamo"),
+    under a floor-level root bone with ``root_motion``."""
     if not motion.skeleton.same_topology(SMPL24):
         raise MotionFormatError("FBX export supports the SMPL-24 skeleton only")
     if motion.num_frames == 0:
@@ -67,9 +68,9 @@ def write_fbx(motion: Motion, path: str | os.PathLike, rig: Rig | str | None = N
         bvh_path, fbx_path = Path(folder) / "dance.bvh", Path(folder) / "dance.fbx"
         with open(bvh_path, "wb") as handle:
             if rig is None:
-                write_bvh(motion, handle)
+                write_bvh(motion, handle, root_motion=root_motion, root_tip=True)
             else:
-                write_bvh_rig(motion, handle, rig)
+                write_bvh_rig(motion, handle, rig, root_motion=root_motion, root_tip=True)
         _run_blender(command + [str(bvh_path), str(fbx_path), str(motion.num_frames), _numpy_dir()],
                      BASE_TIMEOUT_S + TIMEOUT_S_PER_FRAME * motion.num_frames)
         if not fbx_path.is_file() or fbx_path.stat().st_size == 0:
@@ -81,11 +82,11 @@ def write_fbx(motion: Motion, path: str | os.PathLike, rig: Rig | str | None = N
     return str(path)
 
 
-def write_fbx_stream(motion: Motion, handle, rig: Rig | str | None = None) -> None:
+def write_fbx_stream(motion: Motion, handle, rig: Rig | str | None = None, root_motion: bool = False) -> None:
     """Write FBX bytes to a binary handle (the registry's writer signature): Blender writes a file, we copy it."""
     with tempfile.TemporaryDirectory(prefix="choreo-fbx-") as folder:
         path = Path(folder) / "dance.fbx"
-        write_fbx(motion, path, rig)
+        write_fbx(motion, path, rig, root_motion)
         with open(path, "rb") as source:
             shutil.copyfileobj(source, handle)
 

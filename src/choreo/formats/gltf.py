@@ -5,12 +5,15 @@ What we write, so that three.js, Godot, Blender and the Khronos validator read i
   body faces), +X the body's left, right-handed, metres;
 - nodes 0-23: the SMPL-24 joints, named as in SMPL, each translated by its rest offset from its
   parent (node 0, the pelvis, is a scene root: its translation is the root's world position);
-- node 24: the body, one mesh skinned to those joints: a tapered eight-sided spindle per bone, each
+  with root motion, node 0 is a root bone at floor level and the joints follow it (the pelvis,
+  node 1, then moves relative to it);
+- the next node: the body, one mesh skinned to those joints: a tapered eight-sided spindle per bone, each
   vertex rigidly bound (weight 1) to the bone's parent joint; the bind pose is the rest pose
   standing on the floor;
 - one animation, "dance": every joint's local rotation (quaternions x, y, z, w, LINEAR) and the
-  pelvis's translation, keyed at every frame, i / fps seconds.
-:func:`read_glb` reads such files back (joints found by name; one key per frame).
+  pelvis's translation (and the root bone's), keyed at every frame, i / fps seconds.
+:func:`read_glb` reads such files back (joints found by name; one key per frame; nodes above the
+pelvis, such as a root bone, composed into it).
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
-from ..skeleton import SMPL24
+from ..motion.delivery import ROOT_BONE, with_root_bone
+from ..skeleton import SMPL24, matrix_to_quaternion, quaternion_to_matrix
 from .bvh import END_SITES, check_joint_names
 
 BODY_SIDES = 8  # a spindle's cross-section: enough to read as a limb, few enough to stay small
@@ -46,28 +50,34 @@ def _gltf():
 
 
 # -- writing ---------------------------------------------------------------------------------
-def write_glb(motion: Motion, handle) -> None:
-    """Write ``motion`` (SMPL-24 topology) as a binary glTF to a binary handle."""
+def write_glb(motion: Motion, handle, root_motion: bool = False) -> None:
+    """Write ``motion`` (SMPL-24 topology) as a binary glTF to a binary handle; ``root_motion``:
+    under a floor-level root bone (choreo.motion.delivery.with_root_bone), a joint of the skin."""
     if len(motion.skeleton.names) != 24 or motion.skeleton.parents != SMPL24.parents:
         raise MotionFormatError("glTF export supports the SMPL-24 skeleton only")
     check_joint_names(motion.skeleton.names, "glTF")
+    translations = {0: motion.root_positions}
+    if root_motion:
+        motion, translations[1] = with_root_bone(motion)
+        translations[0] = motion.root_positions
     gl = _gltf()
     buffer = _BufferBuilder(gl)
     skeleton = motion.skeleton
+    count = skeleton.num_joints
     floor_height = -skeleton.rest_positions()[:, 1].min()
     bind_positions = skeleton.rest_positions() + [0.0, floor_height, 0.0]
     nodes = _joint_nodes(gl, skeleton, floor_height)
     mesh = _body_mesh(gl, buffer, skeleton, bind_positions)
-    inverse_bind = np.tile(np.eye(4), (24, 1, 1))
+    inverse_bind = np.tile(np.eye(4), (count, 1, 1))
     inverse_bind[:, :3, 3] = -bind_positions
     # glTF matrices are column-major: the transpose of numpy's row-major layout
-    skin = gl.Skin(name="SMPL-24", joints=list(range(24)), skeleton=0,
-                   inverseBindMatrices=buffer.add(inverse_bind.transpose(0, 2, 1).reshape(24, 16), "MAT4"))
+    skin = gl.Skin(name="SMPL-24", joints=list(range(count)), skeleton=0,
+                   inverseBindMatrices=buffer.add(inverse_bind.transpose(0, 2, 1).reshape(count, 16), "MAT4"))
     nodes.append(gl.Node(name="body", mesh=0, skin=0))
-    animations = [_animation(gl, buffer, motion)] if motion.num_frames else []
+    animations = [_animation(gl, buffer, motion, translations)] if motion.num_frames else []
     document = gl.GLTF2(
         asset=gl.Asset(version="2.0", generator="choreo"),
-        scene=0, scenes=[gl.Scene(name="dancer", nodes=[0, 24])],
+        scene=0, scenes=[gl.Scene(name="dancer", nodes=[0, count])],
         nodes=nodes, meshes=[mesh], skins=[skin], animations=animations,
         materials=[gl.Material(name="body", pbrMetallicRoughness=gl.PbrMetallicRoughness(
             baseColorFactor=list(BODY_COLOUR), metallicFactor=0.0, roughnessFactor=0.8))],
@@ -115,7 +125,8 @@ def _joint_nodes(gl, skeleton, floor_height: float) -> list:
 
 def _bone_segments(skeleton, bind_positions: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, int]]:
     """(start, end, joint that carries it) per body part: each bone, plus a head, hands and feet past the leaves."""
-    segments = [(bind_positions[p], bind_positions[j], p) for j, p in enumerate(skeleton.parents) if p >= 0]
+    segments = [(bind_positions[p], bind_positions[j], p) for j, p in enumerate(skeleton.parents)
+                if p >= 0 and skeleton.names[p] != ROOT_BONE]  # a root bone is no part of the body
     for j, name in enumerate(skeleton.names):
         if not skeleton.children(j):
             tip = np.array(END_SITES.get(name, (0.0, 0.05, 0.0)))
@@ -177,15 +188,18 @@ def _continuous(quaternions: np.ndarray) -> np.ndarray:
     return out
 
 
-def _animation(gl, buffer: _BufferBuilder, motion: Motion):
-    """The dance: one time input shared by a rotation channel per joint and the pelvis's translation."""
+def _animation(gl, buffer: _BufferBuilder, motion: Motion, translations: dict[int, np.ndarray]):
+    """The dance: one time input shared by a rotation channel per joint and a translation channel
+    per moving joint (the pelvis; a root bone and the pelvis under it)."""
     times = buffer.add(np.arange(motion.num_frames) / motion.fps, "SCALAR", bounds=True)
     quaternions = _continuous(motion.rotations[..., [1, 2, 3, 0]])  # (w, x, y, z) -> glTF's (x, y, z, w)
     quaternions = quaternions.astype(np.float32)
     quaternions /= np.linalg.norm(quaternions, axis=-1, keepdims=True)  # unit in float32, as validators check
-    samplers = [gl.AnimationSampler(input=times, output=buffer.add(motion.root_positions, "VEC3"),
-                                    interpolation="LINEAR")]
-    channels = [gl.AnimationChannel(sampler=0, target=gl.AnimationChannelTarget(node=0, path="translation"))]
+    samplers, channels = [], []
+    for j, positions in translations.items():
+        samplers.append(gl.AnimationSampler(input=times, output=buffer.add(positions, "VEC3"), interpolation="LINEAR"))
+        channels.append(gl.AnimationChannel(sampler=len(samplers) - 1,
+                                            target=gl.AnimationChannelTarget(node=j, path="translation")))
     for j in range(motion.num_joints):
         samplers.append(gl.AnimationSampler(input=times, output=buffer.add(quaternions[:, j], "VEC4"),
                                             interpolation="LINEAR"))
@@ -253,6 +267,20 @@ def read_glb(path: str | Path) -> Motion:
         raise MotionFormatError(f"{path}: {error}") from None
 
 
+def _node_tracks(document, keyed: dict, frames: int):
+    """``track(node, path)``: (frames, 3 or 4) a node's translation or rotation (x, y, z, w) at
+    every frame, its keys where it is keyed at every frame, else its static value."""
+    def track(node: int, path: str) -> np.ndarray:
+        values = keyed.get((node, path))
+        if values is not None and len(values) == frames:
+            return values
+        static = getattr(document.nodes[node], path)
+        default = [0.0, 0.0, 0.0] if path == "translation" else [0.0, 0.0, 0.0, 1.0]
+        return np.tile(np.asarray(static if static else default, dtype=np.float64), (frames, 1))
+
+    return track
+
+
 def _check_object_count(path) -> None:
     """Refuse a glb whose JSON chunk holds more objects than any dance needs, counted on the plain
     JSON before pygltflib builds a dataclass for each; damage is left to pygltflib's own refusal."""
@@ -289,26 +317,37 @@ def _motion_of(gl, document, path) -> Motion:
     offsets[0] = 0.0
     animation = document.animations[0]
     accessor_array = _cached_accessors(gl, document)
-    times, rotations, root = None, {}, None
+    times, keyed = None, {}
     for channel in animation.channels:
         sampler = animation.samplers[channel.sampler]
         times = accessor_array(sampler.input)[:, 0] if times is None else times
-        values = accessor_array(sampler.output)
-        if channel.target.path == "rotation" and channel.target.node in node_of:
-            rotations[node_of.index(channel.target.node)] = values
-        elif channel.target.path == "translation" and channel.target.node == node_of[0]:
-            root = values
+        if channel.target.path in ("rotation", "translation"):
+            keyed[channel.target.node, channel.target.path] = accessor_array(sampler.output)
     if times is None or len(times) == 0:
         raise MotionFormatError(f"{path}: the animation has no keys")
     frames = len(times)
     quaternions = np.zeros((frames, 24, 4))
     quaternions[..., 0] = 1.0
-    for j, values in rotations.items():
-        if len(values) != frames:
+    for j, node in enumerate(node_of):
+        values = keyed.get((node, "rotation"))
+        if values is not None and len(values) != frames:
             raise MotionFormatError(f"{path}: joint {SMPL24.names[j]} is not keyed at every frame")
-        quaternions[:, j] = values[:, [3, 0, 1, 2]]  # glTF's (x, y, z, w) back to (w, x, y, z)
-    if root is None or len(root) != frames:
-        root = np.tile(document.nodes[node_of[0]].translation or [0.0, 0.0, 0.0], (frames, 1))
+        if values is not None:
+            quaternions[:, j] = values[:, [3, 0, 1, 2]]  # glTF's (x, y, z, w) back to (w, x, y, z)
+    track = _node_tracks(document, keyed, frames)
+    root = track(node_of[0], "translation")
+    parent_of = {child: n for n, node in enumerate(document.nodes) for child in node.children or []}
+    above, seen = node_of[0], {node_of[0]}
+    while above in parent_of:  # a root bone, an exporter's armature: composed in
+        above = parent_of[above]
+        if above in seen:
+            raise MotionFormatError(f"{path}: damaged glb (its node tree has a loop)")
+        seen.add(above)
+        turn = track(above, "rotation")[:, [3, 0, 1, 2]]
+        turn = quaternion_to_matrix(turn / np.linalg.norm(turn, axis=-1, keepdims=True))
+        root = track(above, "translation") + np.einsum("tij,tj->ti", turn, root)
+        pelvis = quaternions[:, 0] / np.linalg.norm(quaternions[:, 0], axis=-1, keepdims=True)
+        quaternions[:, 0] = matrix_to_quaternion(turn @ quaternion_to_matrix(pelvis))
     extras = document.extras if isinstance(document.extras, dict) else {}
     stored = extras.get("fps") if isinstance(extras.get("fps"), (int, float)) else None
     if frames > 1 and times[-1] > times[0]:

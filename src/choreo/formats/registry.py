@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import tempfile
@@ -162,53 +163,59 @@ def read_joint_positions(path: str | os.PathLike, format: str | None = None) -> 
     return motion.joint_positions(), motion.fps
 
 
-def check_output_format(path: str | os.PathLike, format: str | None = None, rig: str | None = None) -> None:
-    """Refuse (OutputError, exit 3) an output whose format is unknown, or that cannot carry ``rig``,
-    before any work is done."""
+def check_output_format(path: str | os.PathLike, format: str | None = None, rig: str | None = None,
+                        root_motion: bool = False) -> None:
+    """Refuse (OutputError, exit 3) an output whose format is unknown, or that cannot carry ``rig``
+    or a root bone (ParameterError, exit 2), before any work is done."""
     if str(path) == STDOUT and format is None:
         raise OutputError("writing to stdout (-) needs an explicit --format")
     chosen = _format_for(path, format, OutputError)
-    _writer(chosen, rig)
+    _writer(chosen, rig, root_motion)
     if chosen.name == "fbx" and blender_command() is None:
         raise OutputError(NO_BLENDER)
 
 
 RIG_WRITERS = {"bvh": write_bvh_rig, "fbx": write_fbx_stream}  # the formats that can carry another rig
+ROOT_MOTION_FORMATS = ("bvh", "glb", "fbx")  # the formats a root bone can be added to (the others hold SMPL-24)
 
 
-def _writer(chosen: MotionFormat, rig: str | None) -> Callable[[Motion, object], None]:
-    """The format's writer, on SMPL-24 or retargeted onto ``rig`` (mixamo: names, tree, T-pose)."""
+def _writer(chosen: MotionFormat, rig: str | None, root_motion: bool = False) -> Callable[[Motion, object], None]:
+    """The format's writer, on SMPL-24 or retargeted onto ``rig`` (mixamo: names, tree, T-pose),
+    under a root bone with ``root_motion``."""
     target = get_rig(rig)  # unknown names: a one-line ParameterError
-    if target is None:
-        return chosen.write
-    if chosen.name not in RIG_WRITERS:
+    if root_motion and chosen.name not in ROOT_MOTION_FORMATS:
+        raise ParameterError(f"--root-motion applies to {', '.join('.' + n for n in ROOT_MOTION_FORMATS)} outputs, "
+                             f"not {chosen.extension} (use --in-place, or one of those)")
+    if target is not None and chosen.name not in RIG_WRITERS:
         raise ParameterError(f"--rig {rig} applies to {' and '.join('.' + n for n in RIG_WRITERS)} outputs, "
                              f"not {chosen.extension}")
-    write = RIG_WRITERS[chosen.name]
-    return lambda motion, handle: write(motion, handle, rig=target)
+    write = chosen.write if target is None else functools.partial(RIG_WRITERS[chosen.name], rig=target)
+    return functools.partial(write, root_motion=True) if root_motion else write
 
 
 def write_motions(motion: Motion, paths: list[str], format: str | None = None, rig: str | None = None,
-                  companions: dict[str, Callable[[Path], None]] | None = None) -> list[str]:
+                  companions: dict[str, Callable[[Path], None]] | None = None, root_motion: bool = False) -> list[str]:
     """Write ``motion`` to every path, all or none: each file is written in full to a temporary
     beside it, and only when every one is written are they moved into place. ``companions`` maps
     more outputs (a preview video) to a function that writes one to the temporary path it is
-    given: they join the all or none."""
+    given: they join the all or none. ``root_motion``: under a floor-level root bone."""
     for path in paths:
-        check_output_format(path, format, rig)
+        check_output_format(path, format, rig, root_motion)
     with contextlib.ExitStack() as stack:
         for path in paths:
             handle = stack.enter_context(atomic_output(path))
-            _writer(_format_for(path, format, OutputError), rig)(motion, handle)
+            _writer(_format_for(path, format, OutputError), rig, root_motion)(motion, handle)
         for path, write in (companions or {}).items():
             write(stack.enter_context(atomic_path(path)))
     return [str(p) for p in paths]
 
 
-def write_motion(motion: Motion, path: str | os.PathLike, format: str | None = None, rig: str | None = None) -> str:
-    """Write ``motion`` atomically (or to stdout for "-"), optionally on another ``rig``; returns the path."""
-    check_output_format(path, format, rig)
-    write = _writer(_format_for(path, format, OutputError), rig)
+def write_motion(motion: Motion, path: str | os.PathLike, format: str | None = None, rig: str | None = None,
+                 root_motion: bool = False) -> str:
+    """Write ``motion`` atomically (or to stdout for "-"), optionally on another ``rig`` or under a
+    root bone; returns the path."""
+    check_output_format(path, format, rig, root_motion)
+    write = _writer(_format_for(path, format, OutputError), rig, root_motion)
     with atomic_output(path) as handle:
         write(motion, handle)
     return str(path)

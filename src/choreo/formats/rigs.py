@@ -26,7 +26,6 @@ directions, so the result is an ordinary SMPL-24 Motion with the same joint posi
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
@@ -36,8 +35,7 @@ import numpy as np
 from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
 from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion
-from .bvh import (END_SITES, UNIT_SCALE, _local_rotations, _write_frames, _write_hierarchy, detect_scale,
-                  read_bvh_raw)
+from .bvh import END_SITES, UNIT_SCALE, _local_rotations, above, detect_scale, in_world, read_bvh_raw, write_tree
 
 LENGTHS = ("motion", "rig")
 
@@ -272,18 +270,14 @@ def rig_motion(motion: Motion, rig: Rig | str, lengths: str = "motion") -> Motio
 
 
 # -- BVH on a rig --------------------------------------------------------------------------------
-def write_bvh_rig(motion: Motion, handle, rig: Rig | str = "mixamo", units: str = "m", lengths: str = "motion") -> None:
-    """Write an SMPL-24 ``motion`` retargeted onto ``rig`` as BVH text (rig names, T-pose offsets) to a binary handle."""
+def write_bvh_rig(motion: Motion, handle, rig: Rig | str = "mixamo", units: str = "m", lengths: str = "motion",
+                  root_motion: bool = False, root_tip: bool = False) -> None:
+    """Write an SMPL-24 ``motion`` retargeted onto ``rig`` as BVH text (rig names, T-pose offsets) to
+    a binary handle; ``root_motion``: under a floor-level root bone (``root_tip``: bvh.write_tree's)."""
     if units not in UNIT_SCALE:
         raise MotionFormatError(f"unknown BVH units {units!r} (use m or cm)")
     rig = get_rig(rig)
-    on_rig = rig_motion(motion, rig, lengths)
-    end_sites = rig_end_sites(motion, rig, lengths)
-    scale = UNIT_SCALE[units]
-    text = io.StringIO()
-    _write_hierarchy(text, on_rig.skeleton, scale, end_sites)
-    handle.write(text.getvalue().encode())
-    _write_frames(handle, on_rig, scale)  # bvh.py's: channels in the same depth-first order as the hierarchy
+    write_tree(rig_motion(motion, rig, lengths), handle, units, rig_end_sites(motion, rig, lengths), root_motion, root_tip)
 
 
 def _match_bones(data, rig: Rig, name: str) -> list[int]:
@@ -304,26 +298,6 @@ def _match_bones(data, rig: Rig, name: str) -> list[int]:
     return index
 
 
-def _hips_in_world(data, rotations: np.ndarray, root: np.ndarray, hips: int) -> tuple[np.ndarray, np.ndarray]:
-    """(T, J, 3, 3) rotations with the hips' own made world, and (T, 3) the hips' world position.
-
-    Exporters may nest the hips under joints the rig does not name (Blender's "Armature", often
-    turned to change the up axis); their offsets and rotations are composed into the hips', so the
-    dance keeps the file's world pose instead of losing them silently."""
-    chain = [hips]
-    while data.joints[chain[-1]].parent >= 0:
-        chain.append(data.joints[chain[-1]].parent)
-    if len(chain) == 1:
-        return rotations, root
-    world, position = rotations[:, chain[-1]], root
-    for joint in reversed(chain[:-1]):  # from below the file's root down to the hips
-        position = position + world @ np.asarray(data.joints[joint].offset, dtype=np.float64)
-        world = world @ rotations[:, joint]
-    rotations = rotations.copy()
-    rotations[:, hips] = world
-    return rotations, position
-
-
 def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto") -> Motion:
     """Read a BVH on ``rig`` (as :func:`write_bvh_rig` writes, or any with the rig's bone names) as an SMPL-24 Motion.
 
@@ -337,8 +311,8 @@ def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto
     index = _match_bones(data, rig, str(path))
     if len(data.values) == 0:
         raise MotionFormatError(f"{path}: no frames")
-    rotmats_file, root = _local_rotations(data)
-    rotmats_file, root = _hips_in_world(data, rotmats_file, root, index[0])
+    rotmats_file, root = _local_rotations(data, translated=[index[0], *above(data, index[0])])
+    rotmats_file, root = in_world(data, rotmats_file, root, index[0])
     local = rotmats_file[:, index]
     offsets = np.array([data.joints[j].offset for j in index])
     offsets[0] = 0.0

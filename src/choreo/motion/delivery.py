@@ -1,22 +1,30 @@
-"""What a file gets after the finishing passes: another frame rate, or the travel taken out.
+"""What a file gets after the finishing passes: another frame rate, the travel taken out, or the
+travel moved onto a root bone.
 
-Both run on the finished dance, so beats and steps keep their times and places. Film works at 24
+All run on the finished dance, so beats and steps keep their times and places. Film works at 24
 fps, games at 60, mocap pipelines at 120; a game engine that moves the character itself wants the
-dance in place.
+dance in place, one that takes root motion wants the travel on a bone at floor level.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
+from ..errors import MotionFormatError
+from ..skeleton import Skeleton, quaternion_conjugate, quaternion_multiply, quaternion_to_matrix
 from .filters import low_pass
-from .motion import Motion
-from .travel import FLOOR_AXES, ground_track
+from .motion import Motion, frame_chunks
+from .travel import FLOOR_AXES, TRACK_CUTOFF_HZ, ground_track
 
 MIN_DELIVERY_FPS, MAX_DELIVERY_FPS = 10.0, 240.0  # the rates --fps takes (film 24 to mocap 120, and a margin)
 ALIASING_MARGIN = 0.8  # share of the new Nyquist frequency kept when the rate falls
 IN_PLACE_REACH = 0.02  # metres the ground track of an in-place dance may stray from its start
 IN_PLACE_ROUNDS = 3
+ROOT_BONE = "root"  # the name Unreal's and Unity's root motion look for first
+ROOT_BONE_CUTOFF_HZ = 0.4  # the root bone's path and facing: slower than the 1 Hz ground track, so it is smooth to
+# the centimetre where the 1 Hz track itself still carries a little of the steps (docs/guide.md, "Game engines")
 
 
 def delivered(motion: Motion, fps: float | None = None, without_travel: bool = False) -> Motion:
@@ -31,6 +39,15 @@ def check_fps(fps: float) -> None:
 
     if not MIN_DELIVERY_FPS <= fps <= MAX_DELIVERY_FPS:
         raise ParameterError(f"--fps must be {MIN_DELIVERY_FPS:g} to {MAX_DELIVERY_FPS:g}, got {fps:g}")
+
+
+def check_travel(in_place: bool, root_motion: bool) -> None:
+    """Refuse, in one line, both ways of handing the travel to an engine at once."""
+    from ..errors import ParameterError
+
+    if in_place and root_motion:
+        raise ParameterError("--in-place and --root-motion exclude each other: one takes the travel out, "
+                             "the other moves it onto a root bone")
 
 
 def at_fps(motion: Motion, fps: float) -> Motion:
@@ -76,3 +93,58 @@ def in_place(motion: Motion) -> Motion:
             break
         root[:, list(FLOOR_AXES)] -= offsets
     return motion.replace(root_positions=root.astype(motion.root_positions.dtype), metadata=dict(motion.metadata))
+
+
+class RootBoneDance(NamedTuple):
+    """A dance under a root bone: ``motion``'s joint 0 is the root bone, joint 1 the dance's own
+    root (pelvis or Hips), which also moves relative to it by ``hips_positions``."""
+
+    motion: Motion
+    hips_positions: np.ndarray  # (T, 3) the dance's root in the root bone's frame
+
+
+def with_root_bone(motion: Motion) -> RootBoneDance:
+    """``motion`` under a root bone for game engines' root motion: the bone stays at floor level
+    (:func:`floor_height`), carries the ground track (choreo.motion.travel) and the facing low-passed
+    as much, and the dance's root moves relative to it. So an engine's capsule travels and turns
+    with the dancer without inheriting the hips' sway, twist and jitter. In the rest pose the
+    dance's root stands above the bone at its own height, the lowest joint on the floor. The path
+    and facing are low-passed at ROOT_BONE_CUTOFF_HZ."""
+    if ROOT_BONE in motion.skeleton.names:
+        raise MotionFormatError(f"the skeleton already has a joint named {ROOT_BONE!r}: it cannot gain a root bone")
+    track = ground_track(motion.root_positions, motion.fps, ROOT_BONE_CUTOFF_HZ)
+    positions = np.zeros((motion.num_frames, 3))
+    positions[:, list(FLOOR_AXES)] = track
+    positions[:, 1] = floor_height(motion)
+    facing = facing_quaternions(motion, ROOT_BONE_CUTOFF_HZ)
+    turned_back = quaternion_conjugate(facing)
+    hips_positions = np.einsum("tij,tj->ti", quaternion_to_matrix(turned_back), motion.root_positions - positions)
+    rotations = np.concatenate([facing[:, None], motion.rotations], axis=1)
+    rotations[:, 1] = quaternion_multiply(turned_back, motion.rotations[:, 0])
+    skeleton = motion.skeleton
+    standing = -skeleton.rest_positions()[:, 1].min()
+    offsets = np.concatenate([[[0.0, 0.0, 0.0], [0.0, standing, 0.0]], skeleton.offsets[1:]])
+    parents = (-1, 0, *(p + 1 for p in skeleton.parents[1:]))
+    under = Skeleton((ROOT_BONE, *skeleton.names), parents, offsets)
+    return RootBoneDance(motion.replace(root_positions=positions, rotations=rotations, skeleton=under,
+                                        metadata=dict(motion.metadata)), hips_positions)
+
+
+def floor_height(motion: Motion) -> float:
+    """Where the floor is: the lowest joint's height, over the frames, at its median. A foot is down
+    in most frames of a dance, and the lowest joint stands on the floor as the rest pose does."""
+    if motion.num_frames == 0:
+        return 0.0
+    lowest = [motion[frames].joint_positions()[..., 1].min(axis=1) for frames in frame_chunks(motion.num_frames)]
+    return float(np.median(np.concatenate(lowest)))
+
+
+def facing_quaternions(motion: Motion, cutoff_hz: float = TRACK_CUTOFF_HZ) -> np.ndarray:
+    """(T, 4) turns about Y: the root joint's heading (its twist about the vertical, which holds
+    even where the body leans or tips), unwrapped and low-passed at ``cutoff_hz``."""
+    w, y = motion.rotations[:, 0, 0], motion.rotations[:, 0, 2]
+    heading = np.unwrap(2.0 * np.arctan2(y, w))
+    heading = low_pass(heading, motion.fps, cutoff_hz) if motion.num_frames else heading
+    facing = np.zeros((motion.num_frames, 4))
+    facing[:, 0], facing[:, 2] = np.cos(heading / 2.0), np.sin(heading / 2.0)
+    return facing
