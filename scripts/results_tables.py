@@ -62,6 +62,20 @@ VALIDATION = [("1.5", "validation-step10000-guidance-1.5"), ("2 (the default)", 
               ("1.5, seeds 3-5", "validation-step10000-guidance-1.5-seeds-3-5"),
               ("2, seeds 3-5", "validation-step10000-guidance-2-seeds-3-5"),
               ("1.5, step 12,000", "validation-step12000-guidance-1.5"), ("2, step 12,000", "validation-step12000-guidance-2")]
+VALIDATION_FINISHING = [("the defaults (3 Hz, 0.65, 1.25)", "validation-step12000-guidance-2"),
+                        ("root path 2 Hz", "validation-step12000-root-path-2hz"),
+                        ("root path 4 Hz", "validation-step12000-root-path-4hz"),
+                        ("footsteps 0.5", "validation-step12000-footsteps-0.5"),
+                        ("footsteps 0.8", "validation-step12000-footsteps-0.8"),
+                        ("pace within 1.15 x", "validation-step12000-pace-1.15"),
+                        ("pace within 1.4 x", "validation-step12000-pace-1.4"),
+                        ("the defaults, seeds 3-5", "validation-step12000-baseline-seeds-3-5"),
+                        ("root path 2 Hz, seeds 3-5", "validation-step12000-root-path-2hz-seeds-3-5"),
+                        ("root path 4 Hz, seeds 3-5", "validation-step12000-root-path-4hz-seeds-3-5"),
+                        ("footsteps 0.5, seeds 3-5", "validation-step12000-footsteps-0.5-seeds-3-5"),
+                        ("footsteps 0.8, seeds 3-5", "validation-step12000-footsteps-0.8-seeds-3-5"),
+                        ("pace within 1.15 x, seeds 3-5", "validation-step12000-pace-1.15-seeds-3-5"),
+                        ("pace within 1.4 x, seeds 3-5", "validation-step12000-pace-1.4-seeds-3-5")]
 
 
 @cache
@@ -118,12 +132,22 @@ def whole_songs_summary() -> str:
 
 def whole_songs_validation() -> str:
     """docs/results.md, "Chosen on the validation clips": music guidance with the held-out model."""
-    header = ["music guidance", "pace m/s", "reach m", "planted", "foot~root", "jerk", "root jerk", "body jerk",
+    return validation_table("music guidance", VALIDATION)
+
+
+def whole_songs_validation_finishing() -> str:
+    """docs/results.md, "Chosen on the validation clips": the finishing passes' settings."""
+    return validation_table("finishing (root path cut-off, footsteps strength, pace bound)", VALIDATION_FINISHING)
+
+
+def validation_table(title: str, runs: list[tuple[str, str]]) -> str:
+    """Runs on the validation clips, real dancers first: means over songs, FIDs, targets missed."""
+    header = [title, "pace m/s", "reach m", "planted", "foot~root", "jerk", "root jerk", "body jerk",
               "beat dip", "FID_k", "FID_g", "targets missed"]
-    first = run(VALIDATION[0][1])
+    first = run(runs[0][1])
     real = mean_rows([song["real"] for song in first["songs"].values()])
     rows = [["real dancers to the same songs", *summary_cells(real, first["real_fid"], "").values()]]
-    for label, name in VALIDATION:
+    for label, name in runs:
         songs = run(name)["songs"]
         misses = f"{len(target_failures(songs))} of {6 * len(songs)}"
         rows.append([label, *summary_cells(run_means(name), run(name)["fid"], misses).values()])
@@ -189,7 +213,8 @@ def whole_songs_guidance() -> str:
 
 TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": whole_songs_per_song,
           "whole-songs-outside": whole_songs_outside, "whole-songs-guidance": whole_songs_guidance,
-          "whole-songs-validation": whole_songs_validation, "readme-results": readme_results}
+          "whole-songs-validation": whole_songs_validation,
+          "whole-songs-validation-finishing": whole_songs_validation_finishing, "readme-results": readme_results}
 
 
 def regenerated(text: str) -> str:

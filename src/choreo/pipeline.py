@@ -120,15 +120,21 @@ class DanceRequest:
     beats: "BeatSource | None" = None  # None: choreo's tracker
     threads: int | None = None  # torch threads; None: what other work leaves idle (choreo.threads)
     constrained: bool = False  # whether constraints will come (keys, seed motion, inpainting, a path)
+    loop: bool = False  # a dance that loops: whole bars, led back into its opening (choreo.looping)
 
     def __post_init__(self):
         check_seed(self.seed)
+        if self.loop and self.constrained:
+            raise ParameterError("--loop leads the dance back into its own opening: it cannot also keep given "
+                                 "frames (--seed-motion, keys, a path)")
         plugin, name = self.backend.plugin, self.backend.name
         if plugin is None:
             return  # a backend object built by hand: it checks its own request
         if self.constrained and not plugin.constraints:
             raise ParameterError(f"the {name} backend does not take constraints (keys, seed motion, inpainting, "
                                  "a path); use sgmd")
+        if self.loop and not plugin.constraints:  # a loop's second take is a constrained one
+            raise ParameterError(f"the {name} backend cannot lead a dance back into its opening (--loop)")
         if plugin.options is not None and self.options:
             check_options(name, plugin.options, self.options, self.backend.bundled)
 
@@ -146,20 +152,43 @@ class DanceRequest:
         function building them from the analysed music) fix frames, joints or a root path;
         ``analysis_progress(done, total)`` and ``progress(fraction)`` report the two long steps."""
         from .finishing import finish
-        from .generator import GenerationRequest
         from .music import Music
         from .threads import use_threads
 
         music = song if isinstance(song, Music) else self.analyse(song, analysis_progress)
         backend = self.backend.loaded()
         fixed = constraints(music) if callable(constraints) else constraints
-        request = GenerationRequest(music, style=self.style, seed=self.seed, options=dict(self.options), constraints=fixed)
         use_threads(self.threads)  # chosen now, beside whatever else runs now
-        # The backend's dance goes straight into finish, which lets go of it after the first pass: an
-        # hour's raw dance kept here beside the finished one would add to the peak memory.
-        finished = finish(backend.generate(request, progress=progress), music.beat_frames, self.finishing, fixed)
+        if self.loop:
+            finished = self.looped(backend, music, progress)
+        else:  # The backend's dance goes straight into finish, which lets go of it after the first pass:
+            # an hour's raw dance kept here beside the finished one would add to the peak memory.
+            finished = finish(backend.generate(self.generation(music, fixed), progress=progress), music.beat_frames,
+                              self.finishing, fixed)
         finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
         return finished
+
+    def looped(self, backend: "Generator", music: "Music", progress: Callable[[float], None] | None = None) -> "Motion":
+        """A dance that loops (choreo.looping): danced once, then again led back into its own
+        opening, finished as an endless loop plays it, and cut to its whole bars."""
+        from .finishing import finish
+        from .looping import Loop
+
+        loop = Loop.of(music, self.style)
+        music = loop.music(music)
+        first = backend.generate(self.generation(music), progress=progress and (lambda done: progress(done / 2)))
+        cycle = loop.cycle(first)
+        second = backend.generate(self.generation(music, loop.constraints(first, cycle)),
+                                  progress=progress and (lambda done: progress(0.5 + done / 2)))
+        around = loop.periodic(second, cycle)
+        return loop.cut(finish(around, music.beat_frames, self.finishing, anchors=loop.anchors(around.num_frames)))
+
+    def generation(self, music: "Music", constraints: "Constraints | None" = None):
+        """What the backend is asked for one dance to ``music``."""
+        from .generator import GenerationRequest
+
+        return GenerationRequest(music, style=self.style, seed=self.seed, options=dict(self.options),
+                                 constraints=constraints)
 
 
 def check_options(backend: str, options_type: type, given: Mapping[str, Any], bundled: bool) -> None:
@@ -193,6 +222,7 @@ def dance(
     beats: str | os.PathLike | None = None,
     threads: int | None = None,
     beat_tracker: str = "choreo",
+    loop: bool = False,
 ) -> "Motion":
     """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
 
@@ -202,7 +232,8 @@ def dance(
     the phase is still tracked) or ``beats`` (a file of beat times, see choreo.music.beat_file)
     replace the tracked beats everywhere: features, beat lock, backend; ``beat_tracker="madmom"``
     has madmom's trained tracker hear them (the madmom extra; its models are CC BY-NC-SA 4.0,
-    non-commercial). The rest: :class:`DanceRequest` and its ``dance``.
+    non-commercial). ``loop``: a dance of whole bars that ends where it began (choreo.looping).
+    The rest: :class:`DanceRequest` and its ``dance``.
     """
     from .music import BeatSource, Music
 
@@ -215,5 +246,5 @@ def dance(
         raise ParameterError("the music is already analysed: give its beats to Music.from_file instead")
     request = DanceRequest(backend=backend, style=style, seed=seed, options=dict(options or {}), finishing=finishing,
                            beats=BeatSource.from_options(bpm, beats, beat_tracker) if given_beats else None,
-                           threads=threads, constrained=constraints is not None)
+                           threads=threads, constrained=constraints is not None, loop=loop)
     return request.dance(song, constraints, analysis_progress, progress)

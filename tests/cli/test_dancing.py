@@ -148,3 +148,13 @@ def test_root_motion_that_cannot_be_written_is_one_line_and_exit_2(tmp_path, cap
     assert main(["generate", str(SONG), "--root-motion", *extra]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and words in err and not list(tmp_path.iterdir())
+
+
+def test_a_loop_says_its_bars_and_refuses_seed_motion(tmp_path, capsys, source):
+    assert main(["graph", str(SONG), "-o", str(tmp_path / "idle.npz"), "--loop", "--threads", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "a loop of" in err and "bars of 4 beats" in err
+    assert read_motion(tmp_path / "idle.npz").metadata["loop"]["beats_per_bar"] == 4
+    assert main(["generate", str(SONG), "-o", str(tmp_path / "x.bvh"), "--loop", "--seed-motion", str(source)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "--loop" in err and not (tmp_path / "x.bvh").exists()

@@ -38,6 +38,8 @@ IN_PLACE = typer.Option(False, "--in-place", help="Take the travel out: the danc
                         "height and facing kept (for a game engine that moves the character itself).")
 ROOT_MOTION = typer.Option(False, "--root-motion", help="Write .bvh/.glb/.fbx under a root bone at floor level that "
                            "carries the travel and the facing, the hips moving relative to it (game engines' root motion).")
+LOOP = typer.Option(False, "--loop", help="A dance that loops, for emotes and idle dances: the song's whole bars from its "
+                    "start, led back into its own opening (the turn and travel per cycle are in the file's metadata).")
 BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
                             help="Who hears the beats: choreo (licence-clean) or madmom (pip install "
                                  "\"choreo\\[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
@@ -94,7 +96,7 @@ class DanceFlags:
         return Outputs(paths=paths, format=self.format if format else None, rig=self.rig, preview=preview,
                        fps=self.fps, in_place=self.in_place, root_motion=self.root_motion)
 
-    def request(self, constrained: bool = False, **factory_options) -> "DanceRequest":
+    def request(self, constrained: bool = False, loop: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not
         take, a value it refuses, unreadable --beats, constraints it cannot keep."""
         from ..errors import ParameterError
@@ -112,7 +114,7 @@ class DanceFlags:
         beats = BeatSource.from_options(self.bpm, self.beats, self.beat_tracker)
         return DanceRequest(backend=backend, style=self.style,
                             seed=self.seed, options=self.options, finishing=self.finishing, beats=beats,
-                            threads=self.threads, constrained=constrained)
+                            threads=self.threads, constrained=constrained, loop=loop)
 
 
 def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
@@ -204,8 +206,10 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
         kept = f", {fixed.describe()}" if fixed else ""
         describe = request.backend.plugin.describe
         how = describe(meta) if describe else ""
+        loop = meta.get("loop")
+        looped = f", a loop of {loop['bars']} bars of {loop['beats_per_bar']} beats" if loop else ""
         done = (f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at "
-                f"{motion.fps:g} fps ({request.backend.name}, {how}{kept}; {seconds:.1f} s)")
+                f"{motion.fps:g} fps{looped} ({request.backend.name}, {how}{kept}; {seconds:.1f} s)")
         stderr_console.print(markup(done), highlight=False)
     return {"song": str(song), "ok": True, "outputs": written, "seconds_of_dance": round(motion.duration, 3),
             "frames": motion.num_frames, "fps": motion.fps, "genre": meta.get("genre"), "seed": request.seed,

@@ -12,7 +12,7 @@ from typing import List, Optional
 
 import typer
 
-from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, dance_one, dancing_command
+from .dancing import LOOP, OUTPUT, PREVIEW, SONG, DanceFlags, dance_one, dancing_command
 from .progress import stderr_console
 from .text import markup
 
@@ -24,6 +24,7 @@ def generate(
         None, "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several."),
     out_dir: Optional[Path] = typer.Option(None, help="Folder for one dance per song, named after the song (default: the current folder)."),
     seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it."),
+    loop: bool = LOOP,
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = PREVIEW,
     shard: Optional[str] = typer.Option(None, "--shard", help="With --out-dir: dance only shard K of N (K/N, 1-based) of the "
@@ -50,6 +51,7 @@ def generate(
       choreo generate song.mp3 -o dance.bvh --preview      # and dance.mp4 to watch
       choreo generate song.mp3 -o dance.fbx --rig mixamo   # for a Mixamo character (needs Blender)
       choreo generate song.mp3 -o dance.bvh --bpm 128      # or --beats beats.csv: beats you know
+      choreo generate song.mp3 -o emote.glb --loop --in-place --fps 60   # a looping emote for a game
     """
     import json
 
@@ -95,7 +97,7 @@ def generate(
         opening = as_smpl(read_motion(seed_motion), music.fps)
         return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
 
-    request = dance.request(constrained=seed_motion is not None)
+    request = dance.request(constrained=seed_motion is not None, loop=loop)
     summaries, failed = [], 0
     for song in songs:
         if skip_existing and done_before(song):

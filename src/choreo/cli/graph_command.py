@@ -8,7 +8,7 @@ from typing import List, Optional
 import typer
 from typer.core import TyperGroup
 
-from .dancing import OUTPUT, PREVIEW, SONG, DanceFlags, dance_one, dancing_command
+from .dancing import LOOP, OUTPUT, PREVIEW, SONG, DanceFlags, dance_one, dancing_command
 from .progress import progress_bar, stderr_console
 from .text import markup
 
@@ -34,7 +34,7 @@ graph_app = typer.Typer(
 def graph_dance(
     song: Path = SONG, output: List[str] = OUTPUT,
     repertoire: Optional[Path] = typer.Option(None, help="Repertoire from choreo graph build (default: the bundled one)."),
-    preview: bool = PREVIEW,
+    preview: bool = PREVIEW, loop: bool = LOOP,
     dance: DanceFlags = None,
 ) -> None:
     """Dance to a song with clips of a repertoire, re-timed onto the music and joined by a dynamic graph.
@@ -47,8 +47,9 @@ def graph_dance(
       choreo graph song.mp3 -o dance.bvh --repertoire my_moves.npz -k 128
       choreo graph song.mp3 -o dance.npz --style waltz --preview
       choreo graph song.mp3 -o dance.bvh --warp-smoothing 0      # the paper's raw warps
+      choreo graph song.mp3 -o idle.fbx --rig mixamo --loop      # a looping idle dance
     """
-    request = dance.request(repertoire=repertoire)
+    request = dance.request(repertoire=repertoire, loop=loop)
     dance_one(request, song, dance.outputs(output, preview))
 
 

@@ -24,10 +24,11 @@ if TYPE_CHECKING:
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing | None" = None,
-           constraints: "Constraints | np.ndarray | None" = None) -> Motion:
+           constraints: "Constraints | np.ndarray | None" = None, anchors: np.ndarray | None = None) -> Motion:
     """``motion`` through the passes ``finishing`` turns on (default: as `choreo generate` does);
-    frames the ``constraints`` give (or a (T,) mask of fixed frames) stay. Each pass runs with the
-    settings ``finishing.configs`` gives it, or its own defaults.
+    frames the ``constraints`` give (or a (T,) mask of fixed frames) stay. ``anchors``, a (T,) mask,
+    are frames the re-timing leaves at their times (a loop's seam) while every pass still works on
+    them. Each pass runs with the settings ``finishing.configs`` gives it, or its own defaults.
 
     The order: the speed limit first, so that a glitch is not taken for a motion beat, and last,
     since re-timing stretches speeds. The root path and the pace before the footsteps, which plant
@@ -39,8 +40,9 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
     on = finishing or Finishing()
     settings = on.configs
     fixed = constraints.fixed_frames() if hasattr(constraints, "fixed_frames") else constraints
+    timed = fixed if anchors is None else np.asarray(anchors, bool) | (False if fixed is None else np.asarray(fixed, bool))
     passes = ((on.speed_limit, speed_limit, fixed), (on.root_path, root_path, fixed), (on.pace, pace, fixed),
-              (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, fixed), (on.foot_lock, foot_lock, fixed))
+              (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, timed), (on.foot_lock, foot_lock, fixed))
     for enabled, run, kept in passes:
         if enabled:
             motion = _run(run, motion, music_beat_frames, kept, settings.get(run.__name__))

@@ -28,7 +28,12 @@ ROOT_BONE_CUTOFF_HZ = 0.4  # the root bone's path and facing: slower than the 1 
 
 
 def delivered(motion: Motion, fps: float | None = None, without_travel: bool = False) -> Motion:
-    """The finished ``motion`` as a file gets it: in place (``without_travel``), then at ``fps``."""
+    """The finished ``motion`` as a file gets it: in place (``without_travel``), then at ``fps``
+    (a loop stays a loop: choreo.looping.delivered_loop)."""
+    if "loop" in motion.metadata:
+        from ..looping import delivered_loop
+
+        return delivered_loop(motion, fps, without_travel)
     motion = in_place(motion) if without_travel else motion
     return at_fps(motion, fps) if fps is not None else motion
 

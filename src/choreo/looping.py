@@ -1,0 +1,215 @@
+"""Dances that loop: emotes and idle dances, which a game plays over and over.
+
+A loop covers a whole number of bars from the song's start (the song's length rounded down; a bar
+is 4 beats, 3 for a waltz), so that the music loops with it. It ends where it began, in pose and in
+motion, up to where it stands and faces: an engine adds that per-cycle travel and turn itself
+(``metadata["loop"]``). The backend leads the dance back into its own opening with its own
+machinery, not a cross-fade (which slides the feet). The loop is danced as a loop plays it: its
+last seconds first (a lead-in, so the opening is danced mid-dance), the loop, then its opening
+again. The first take's lead-in and opening are kept for a second take, and its opening, turned
+the way the first take faced at the loop's end, is given as the frames after the end (its pose
+and height, not where on the floor: the second take returns from wherever it went): SGMD
+in-betweens into them, the graph's guided walk picks the way back to its first node. The
+finishing passes run over the loop with its end before it and its opening after it, as an
+endless loop plays it, so steps and beats carry on across the seam (the re-timing leaves the
+seam's frames at their times); what the seam is then off by, in pose and in velocity, is closed
+over the last half second by a smooth displacement (:func:`bent_into`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .errors import ParameterError
+from .motion import Motion
+from .motion.filters import low_pass
+from .motion.stitch import facing_yaw, rotate_about_y, turned_and_moved
+from .motion.travel import TRACK_CUTOFF_HZ, ground_track
+from .skeleton import axis_angle_to_quaternion, quaternion_conjugate, quaternion_multiply, quaternion_to_axis_angle
+
+RETURN_SECONDS = 0.25  # the opening given again after the end: a pose and its motion, a few model frames
+LEAD_IN_SECONDS = 4.0  # the loop's end danced before its opening, as it will be in a loop: the opening is mid-dance
+CLOSING_SECONDS = 0.5  # the end of the loop bent into the next cycle's opening, pose and velocity
+BEATS_PER_BAR, WALTZ_BEATS_PER_BAR = 4, 3
+
+
+@dataclass(frozen=True)
+class Loop:
+    """Where a song's loop ends: ``frames`` of dance (``bars`` bars of ``beats_per_bar`` beats)."""
+
+    frames: int
+    bars: int
+    beats_per_bar: int
+    returning: int  # frames of the opening given again after the end
+    lead_in: int  # frames of the loop's end danced before its opening, and of its opening after its end; cut
+
+    @classmethod
+    def of(cls, music, style: str | None) -> "Loop":
+        """The longest whole number of bars the song holds, measured on its beats from the start."""
+        per_bar = WALTZ_BEATS_PER_BAR if style and "waltz" in style.lower() else BEATS_PER_BAR
+        beats = np.asarray(music.beat_times, dtype=np.float64)
+        if len(beats) > 1:  # the beats the song's end cuts off, at the tempo's own spacing
+            spacing = float(np.median(np.diff(beats)))
+            beats = np.r_[beats, beats[-1] + spacing * np.arange(1, per_bar + 1)]
+        bar_starts = beats[::per_bar]
+        lengths = bar_starts - beats[0] if len(beats) else bar_starts
+        fits = np.flatnonzero(lengths <= music.duration + 1e-9)
+        bars = int(fits[-1]) if len(fits) else 0
+        if bars < 1:
+            raise ParameterError(f"--loop needs a whole bar ({per_bar} beats) in the song; it has {len(beats)} beats")
+        frames = min(int(round(lengths[bars] * music.fps)), music.num_frames)
+        return cls(frames, bars, per_bar, max(2, int(round(RETURN_SECONDS * music.fps))),
+                   min(frames, int(round(LEAD_IN_SECONDS * music.fps))))
+
+    @property
+    def span(self) -> slice:
+        """The loop's own frames within what is danced (lead-in, loop, return)."""
+        return slice(self.lead_in, self.lead_in + self.frames)
+
+    def music(self, music):
+        """The loop's music as a loop plays it: its end, the loop, then its opening again."""
+        order = np.r_[np.arange(self.frames - self.lead_in, self.frames), np.arange(self.frames), np.arange(self.lead_in)]
+        times = np.asarray(music.beat_times)
+        times = times[times < self.frames / music.fps]
+        lead = self.lead_in / music.fps
+        beats = np.r_[times[times >= (self.frames - self.lead_in) / music.fps] - self.frames / music.fps + lead,
+                      times + lead, times[times < lead] + lead + self.frames / music.fps]
+        return replace(music, features=music.features[order], beat_times=beats, duration=len(order) / music.fps,
+                       log_mel=None if music.log_mel is None else music.log_mel[order])
+
+    def constraints(self, first: Motion, cycle: tuple[float, np.ndarray]):
+        """``first``'s lead-in and opening kept, and its opening given again, turned and moved by
+        ``cycle`` (:meth:`cycle`), as the frames after the loop's end."""
+        from .constraints import Constraints
+
+        kept = first.slice_frames(0, self.lead_in + self.returning)
+        back = turned_and_moved(kept.slice_frames(self.lead_in), *cycle)
+        end = self.lead_in + self.frames
+        given = Constraints.none(end + self.lead_in, first.fps).fix_motion(kept).fix_motion(back, at=end, root=False)
+        given.root[end:end + self.returning, 1] = back.root_positions[:, 1]  # its height, not where on the floor:
+        given.root_known[end:end + self.returning, 1] = True  # the second take returns from where it went
+        return given
+
+    def cycle(self, motion: Motion) -> tuple[float, np.ndarray]:
+        """(angle, offset): the per-cycle turn about the vertical and the floor offset that carry
+        frame 0 onto where ``motion`` is at the loop's end (its ground track and facing there)."""
+        track = ground_track(motion.root_positions, motion.fps)
+        yaw = np.unwrap(facing_yaw(motion.joint_positions()))
+        yaw = low_pass(yaw, motion.fps, TRACK_CUTOFF_HZ)
+        first, last = self.span.start, self.span.stop
+        angle = float(yaw[last] - yaw[first])
+        start = np.array([track[first, 0], 0.0, track[first, 1]])
+        end = np.array([track[last, 0], 0.0, track[last, 1]])
+        return angle, end - rotate_about_y(start, angle)
+
+    def periodic(self, second: Motion, cycle: tuple[float, np.ndarray]) -> Motion:
+        """The second take's loop, its last half second bent into the return (a model's in-between
+        may meet given frames at another speed), as an endless loop would play it around one
+        cycle: its end before it and its opening after it, moved by ``cycle``. What the
+        finishing passes run over, so that they treat the seam as any other frame."""
+        end = self.span.stop
+        own = second.slice_frames(self.span.start, end)
+        angle = cycle[0]
+        offset = second.root_positions[end] - rotate_about_y(own.root_positions[0], angle)
+        offset[1] = 0.0  # the turn the opening was given with, the travel the second take went
+        back = turned_and_moved(own.slice_frames(0, 2), angle, offset)
+        own = bent_into(own, back, self.frames, int(round(CLOSING_SECONDS * second.fps)))
+        before = turned_and_moved(own.slice_frames(self.frames - self.lead_in), -angle, -rotate_about_y(offset, -angle))
+        after = turned_and_moved(own.slice_frames(0, self.lead_in), angle, offset)
+        return Motion.concatenate([before, own, after]).replace(metadata=dict(second.metadata))
+
+    def anchors(self, num_frames: int) -> np.ndarray:
+        """(T,) the loop's first frame and its return: where the re-timing must leave the dance."""
+        anchors = np.zeros(num_frames, bool)
+        anchors[[self.span.start, self.span.stop]] = True
+        return anchors
+
+    def cut(self, motion: Motion) -> Motion:
+        """The loop's own frames of the finished ``motion``, closed onto its next cycle, with the
+        per-cycle turn and travel in the metadata (``loop``)."""
+        angle, offset = self.cycle(motion)
+        loop = {"bars": self.bars, "beats_per_bar": self.beats_per_bar, "seconds": round(self.frames / motion.fps, 4),
+                "turn_degrees": float(np.degrees(angle)), "travel_m": [float(offset[0]), float(offset[2])]}
+        own = motion.slice_frames(self.span.start, self.span.stop).replace(metadata=dict(motion.metadata, loop=loop))
+        return closed(own, int(round(CLOSING_SECONDS * motion.fps)))
+
+
+def closed(motion: Motion, frames: int) -> Motion:
+    """A looped ``motion`` that runs into its next cycle (:func:`next_cycle`) as into its own next
+    frame: its last ``frames`` bent by :func:`bent_into`."""
+    return bent_into(motion, next_cycle(motion, 2), motion.num_frames, frames)
+
+
+def bent_into(motion: Motion, after: Motion, end: int, frames: int) -> Motion:
+    """``motion`` with the ``frames`` before frame ``end`` bent so that they run into ``after``'s
+    two frames as into their own next ones: the extrapolated pose and the velocity at ``end``
+    meet them. The bend is a cubic (Hermite) displacement, zero and flat where it starts, on the
+    root's position and on each joint's rotation (in its own frame); frames from ``end`` on stay."""
+    frames = min(frames, end - 2)
+    if frames < 2:
+        return motion
+    root, rotations = motion.root_positions.copy(), motion.rotations.copy()
+    last, before = end - 1, end - 2
+    step = root[last] - root[before]
+    root_error = (after.root_positions[0] - (root[last] + step), after.root_positions[1] - after.root_positions[0] - step)
+    turn = quaternion_multiply(quaternion_conjugate(rotations[before]), rotations[last])  # each joint's last step
+    ahead = quaternion_multiply(rotations[last], turn)
+    turn_after = quaternion_multiply(quaternion_conjugate(after.rotations[0]), after.rotations[1])
+    rotation_error = (quaternion_to_axis_angle(quaternion_multiply(quaternion_conjugate(ahead), after.rotations[0])),
+                      quaternion_to_axis_angle(quaternion_multiply(quaternion_conjugate(turn), turn_after)))
+    s = np.arange(frames) / frames  # 0 where the bend starts; 1 would be ``after``'s first frame
+    reach, slope = 3 * s**2 - 2 * s**3, (s**3 - s**2) * frames  # Hermite: value and slope at the end
+    tail = slice(end - frames, end)
+    root[tail] += reach[:, None] * root_error[0] + slope[:, None] * root_error[1]
+    bend = reach[:, None, None] * rotation_error[0] + slope[:, None, None] * rotation_error[1]
+    rotations[tail] = quaternion_multiply(rotations[tail], axis_angle_to_quaternion(bend))
+    return motion.replace(root_positions=root, rotations=rotations, metadata=dict(motion.metadata))
+
+
+def delivered_loop(motion: Motion, fps: float | None = None, without_travel: bool = False) -> Motion:
+    """A loop in place (its per-cycle travel then only the turn about where it started) and at
+    ``fps``, still a loop: resampled over whole cycles, so ``fps`` times its length, rounded,
+    frames play one cycle (its tempo off by under half a frame per cycle), then closed again."""
+    from .motion.delivery import ALIASING_MARGIN, in_place, low_passed
+
+    changed = without_travel or (fps is not None and not np.isclose(fps, motion.fps))
+    if without_travel:
+        track = ground_track(motion.root_positions, motion.fps)[0]  # in place keeps the track's start
+        start = np.array([track[0], 0.0, track[1]])
+        motion = in_place(motion)
+        travel = start - rotate_about_y(start, np.radians(motion.metadata["loop"]["turn_degrees"]))
+        motion.metadata = dict(motion.metadata, loop=dict(motion.metadata["loop"], travel_m=[travel[0], travel[2]]))
+    if fps is not None and not np.isclose(fps, motion.fps):
+        count = max(2, int(round(motion.num_frames * fps / motion.fps)))
+        around = Motion.concatenate([motion, next_cycle(motion, 1)])
+        around = low_passed(around, ALIASING_MARGIN * fps / 2) if fps < motion.fps else around
+        loop = dict(motion.metadata["loop"], seconds=round(count / fps, 4))
+        motion = around.sample_frames(np.arange(count) * motion.num_frames / count).replace(
+            fps=float(fps), metadata=dict(motion.metadata, loop=loop))
+    return closed(motion, int(round(CLOSING_SECONDS * motion.fps))) if changed else motion
+
+
+def next_cycle(motion: Motion, frames: int = 1) -> Motion:
+    """The first ``frames`` of a looped ``motion`` as they come again after its end: turned and
+    moved by the per-cycle turn and travel its metadata carries."""
+    loop = motion.metadata["loop"]
+    travel = loop["travel_m"]
+    return turned_and_moved(motion.slice_frames(0, frames), np.radians(loop["turn_degrees"]),
+                            np.array([travel[0], 0.0, travel[1]]))
+
+
+def seam(motion: Motion) -> tuple[float, float]:
+    """How a loop's seam compares with its own frame steps, played over and over: (the step from its
+    last frame into the next cycle's first, the larger change of velocity there), each over the
+    95th percentile of the same figure inside the dance; joints' moves averaged, in metres."""
+    positions = Motion.concatenate([motion, next_cycle(motion, 2)]).joint_positions()
+    moves = np.diff(positions, axis=0)
+    steps = np.linalg.norm(moves, axis=-1).mean(axis=1)
+    changes = np.linalg.norm(np.diff(moves, axis=0), axis=-1).mean(axis=1)
+    last = motion.num_frames - 1  # the step from the last frame into the next cycle
+    inside = np.delete(steps, last)
+    inside_changes = np.delete(changes, [last - 1, last])
+    return (float(steps[last] / np.percentile(inside, 95)),
+            float(max(changes[last - 1], changes[last]) / np.percentile(inside_changes, 95)))
