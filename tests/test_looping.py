@@ -42,6 +42,7 @@ def circling(frames: int = 300, turn: float = np.pi / 2) -> Motion:
 def test_a_loop_is_the_songs_whole_bars_from_its_start():
     loop = Loop.of(music(), "cha-cha")
     assert (loop.bars, loop.beats_per_bar, loop.frames) == (5, 4, 300)  # 5 bars of 2 s; a sixth ends past 10.2 s
+    assert (loop.lead_in, loop.returning, loop.after) == (120, 8, 30)  # 4 s before, 0.25 s given again of 1 s after
     waltz = Loop.of(music(), "Viennese waltz")
     assert (waltz.bars, waltz.beats_per_bar, waltz.frames) == (6, 3, 270)
     assert Loop.of(music(seconds=8.3), None).bars == 4  # the last bar's closing beat lies past the end, at the tempo
@@ -62,6 +63,8 @@ def test_the_loop_is_danced_to_its_end_then_itself_then_its_opening():
     np.testing.assert_allclose(beats[beats < 4.0], np.arange(6.25, 10.0, 0.5) - 6.0)  # the loop's last 4 s
     np.testing.assert_allclose(beats[(beats >= 4.0) & (beats < 14.0)], np.arange(0.25, 10.0, 0.5) + 4.0)
     np.testing.assert_allclose(beats[beats >= 14.0], np.arange(0.25, 4.0, 0.5) + 14.0)
+    danced = loop.music(song, loop.after)  # what the two takes dance: a second of the opening after the end
+    assert danced.num_frames == 120 + 300 + 30 and danced.beat_times[-1] == pytest.approx(14.75)
 
 
 def test_a_bend_runs_the_end_into_the_given_frames_pose_and_velocity():

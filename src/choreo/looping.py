@@ -5,8 +5,8 @@ is 4 beats, 3 for a waltz), so that the music loops with it. It ends where it be
 motion, up to where it stands and faces: an engine adds that per-cycle travel and turn itself
 (``metadata["loop"]``). The backend leads the dance back into its own opening with its own
 machinery, not a cross-fade (which slides the feet). The loop is danced as a loop plays it: its
-last seconds first (a lead-in, so the opening is danced mid-dance), the loop, then its opening
-again. The first take's lead-in and opening are kept for a second take, and its opening, turned
+last seconds first (a lead-in, so the opening is danced mid-dance), the loop, then a second of its
+opening again. The first take's lead-in and opening are kept for a second take, and its opening, turned
 the way the first take faced at the loop's end, is given as the frames after the end (its pose
 and height, not where on the floor: the second take returns from wherever it went): SGMD
 in-betweens into them, the graph's guided walk picks the way back to its first node. The
@@ -30,6 +30,7 @@ from .motion.travel import TRACK_CUTOFF_HZ, ground_track
 from .skeleton import axis_angle_to_quaternion, quaternion_conjugate, quaternion_multiply, quaternion_to_axis_angle
 
 RETURN_SECONDS = 0.25  # the opening given again after the end: a pose and its motion, a few model frames
+AFTER_SECONDS = 1.0  # the opening's music danced past the loop's end: 4 s made SGMD's return slide more (docs/results.md)
 LEAD_IN_SECONDS = 4.0  # the loop's end danced before its opening, as it will be in a loop: the opening is mid-dance
 CLOSING_SECONDS = 0.5  # the end of the loop bent into the next cycle's opening, pose and velocity
 BEATS_PER_BAR, WALTZ_BEATS_PER_BAR = 4, 3
@@ -43,7 +44,8 @@ class Loop:
     bars: int
     beats_per_bar: int
     returning: int  # frames of the opening given again after the end
-    lead_in: int  # frames of the loop's end danced before its opening, and of its opening after its end; cut
+    lead_in: int  # frames of the loop's end danced before its opening (and, finishing it, of its opening after)
+    after: int  # frames of the opening's music the two takes dance past the loop's end
 
     @classmethod
     def of(cls, music, style: str | None) -> "Loop":
@@ -60,22 +62,25 @@ class Loop:
         if bars < 1:
             raise ParameterError(f"--loop needs a whole bar ({per_bar} beats) in the song; it has {len(beats)} beats")
         frames = min(int(round(lengths[bars] * music.fps)), music.num_frames)
-        return cls(frames, bars, per_bar, max(2, int(round(RETURN_SECONDS * music.fps))),
-                   min(frames, int(round(LEAD_IN_SECONDS * music.fps))))
+        returning = max(2, int(round(RETURN_SECONDS * music.fps)))
+        return cls(frames, bars, per_bar, returning, min(frames, int(round(LEAD_IN_SECONDS * music.fps))),
+                   max(returning, int(round(AFTER_SECONDS * music.fps))))
 
     @property
     def span(self) -> slice:
         """The loop's own frames within what is danced (lead-in, loop, return)."""
         return slice(self.lead_in, self.lead_in + self.frames)
 
-    def music(self, music):
-        """The loop's music as a loop plays it: its end, the loop, then its opening again."""
-        order = np.r_[np.arange(self.frames - self.lead_in, self.frames), np.arange(self.frames), np.arange(self.lead_in)]
+    def music(self, music, after: int | None = None):
+        """The loop's music as a loop plays it: its end, the loop, then its opening again (``after``
+        frames of it; default: as many as the lead-in)."""
+        after = self.lead_in if after is None else after
+        order = np.r_[np.arange(self.frames - self.lead_in, self.frames), np.arange(self.frames), np.arange(after)]
         times = np.asarray(music.beat_times)
         times = times[times < self.frames / music.fps]
         lead = self.lead_in / music.fps
         beats = np.r_[times[times >= (self.frames - self.lead_in) / music.fps] - self.frames / music.fps + lead,
-                      times + lead, times[times < lead] + lead + self.frames / music.fps]
+                      times + lead, times[times < after / music.fps] + lead + self.frames / music.fps]
         return replace(music, features=music.features[order], beat_times=beats, duration=len(order) / music.fps,
                        log_mel=None if music.log_mel is None else music.log_mel[order])
 
@@ -87,7 +92,7 @@ class Loop:
         kept = first.slice_frames(0, self.lead_in + self.returning)
         back = turned_and_moved(kept.slice_frames(self.lead_in), *cycle)
         end = self.lead_in + self.frames
-        given = Constraints.none(end + self.lead_in, first.fps).fix_motion(kept).fix_motion(back, at=end, root=False)
+        given = Constraints.none(first.num_frames, first.fps).fix_motion(kept).fix_motion(back, at=end, root=False)
         given.root[end:end + self.returning, 1] = back.root_positions[:, 1]  # its height, not where on the floor:
         given.root_known[end:end + self.returning, 1] = True  # the second take returns from where it went
         return given

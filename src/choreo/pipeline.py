@@ -175,13 +175,14 @@ class DanceRequest:
         from .looping import Loop
 
         loop = Loop.of(music, self.style)
-        music = loop.music(music)
-        first = backend.generate(self.generation(music), progress=progress and (lambda done: progress(done / 2)))
+        danced = loop.music(music, loop.after)
+        first = backend.generate(self.generation(danced), progress=progress and (lambda done: progress(done / 2)))
         cycle = loop.cycle(first)
-        second = backend.generate(self.generation(music, loop.constraints(first, cycle)),
+        second = backend.generate(self.generation(danced, loop.constraints(first, cycle)),
                                   progress=progress and (lambda done: progress(0.5 + done / 2)))
         around = loop.periodic(second, cycle)
-        return loop.cut(finish(around, music.beat_frames, self.finishing, anchors=loop.anchors(around.num_frames)))
+        return loop.cut(finish(around, loop.music(music).beat_frames, self.finishing,
+                               anchors=loop.anchors(around.num_frames)))
 
     def generation(self, music: "Music", constraints: "Constraints | None" = None):
         """What the backend is asked for one dance to ``music``."""
