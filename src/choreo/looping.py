@@ -13,7 +13,8 @@ in-betweens into them, the graph's guided walk picks the way back to its first n
 finishing passes run over the loop with its end before it and its opening after it, as an
 endless loop plays it, so steps and beats carry on across the seam (the re-timing leaves the
 seam's frames at their times); what the seam is then off by, in pose and in velocity, is closed
-over the last half second by a smooth displacement (:func:`bent_into`).
+over the last half second by a smooth displacement (:func:`bent_into`), each foot taking its share
+while it moves (:func:`stepping_into`).
 """
 
 from __future__ import annotations
@@ -143,8 +144,32 @@ class Loop:
 
 def closed(motion: Motion, frames: int) -> Motion:
     """A looped ``motion`` that runs into its next cycle (:func:`next_cycle`) as into its own next
-    frame: its last ``frames`` bent by :func:`bent_into`."""
-    return bent_into(motion, next_cycle(motion, 2), motion.num_frames, frames)
+    frame: its last ``frames`` bent by :func:`bent_into`, each ankle then moved while its foot
+    moves (:func:`stepping_into`)."""
+    return stepping_into(motion, bent_into(motion, next_cycle(motion, 2), motion.num_frames, frames), frames)
+
+
+def stepping_into(motion: Motion, bent: Motion, frames: int) -> Motion:
+    """``bent`` (``motion`` with its end bent) with each ankle's share of the bend taken while that
+    foot moves in ``motion``, in proportion to its speed, not evenly over the frames: a bend over
+    a standing foot would slide it. The legs reach the ankles by two-bone IK (choreo.finishing.footsteps)."""
+    from .finishing.footsteps import LEGS, legs_reaching
+
+    frames = min(frames, motion.num_frames - 1)
+    if frames < 2:
+        return bent
+    tail = slice(motion.num_frames - frames, motion.num_frames)
+    ankles = [leg[2] for leg in LEGS]
+    before = motion.slice_frames(tail.start - 1).joint_positions()[:, ankles]  # one frame before, for speeds
+    after = bent.slice_frames(tail.start).joint_positions()
+    moved = after[:, ankles] - before[1:]  # what the bend did to each ankle
+    speed = np.linalg.norm(np.diff(before, axis=0), axis=-1)  # (frames, 2)
+    share = np.cumsum(speed, axis=0) / np.maximum(speed.sum(axis=0), 1e-9)
+    share = np.where(speed.sum(axis=0) > 1e-6, share, np.linspace(1 / frames, 1, frames)[:, None])
+    targets = before[1:] + share[..., None] * moved[-1]
+    rotations = bent.rotations.copy()
+    rotations[tail] = legs_reaching(bent.rotations[tail], after, targets, bent.skeleton.parents)
+    return bent.replace(rotations=rotations, metadata=dict(bent.metadata))
 
 
 def bent_into(motion: Motion, after: Motion, end: int, frames: int) -> Motion:
