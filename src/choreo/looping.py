@@ -52,7 +52,7 @@ class Loop:
     def of(cls, music, style: str | None) -> "Loop":
         """The longest whole number of bars the song holds, measured on its beats from the start."""
         per_bar = WALTZ_BEATS_PER_BAR if style and "waltz" in style.lower() else BEATS_PER_BAR
-        beats = np.asarray(music.beat_times, dtype=np.float64)
+        beats = heard = np.asarray(music.beat_times, dtype=np.float64)
         if len(beats) > 1:  # the beats the song's end cuts off, at the tempo's own spacing
             spacing = float(np.median(np.diff(beats)))
             beats = np.r_[beats, beats[-1] + spacing * np.arange(1, per_bar + 1)]
@@ -61,7 +61,8 @@ class Loop:
         fits = np.flatnonzero(lengths <= music.duration + 1e-9)
         bars = int(fits[-1]) if len(fits) else 0
         if bars < 1:
-            raise ParameterError(f"--loop needs a whole bar ({per_bar} beats) in the song; it has {len(beats)} beats")
+            raise ParameterError(f"--loop needs a whole bar ({per_bar} beats) in the song; it is shorter than one "
+                                 f"({len(heard)} beat{'' if len(heard) == 1 else 's'} heard in {music.duration:.1f} s)")
         frames = min(int(round(lengths[bars] * music.fps)), music.num_frames)
         returning = max(2, int(round(RETURN_SECONDS * music.fps)))
         return cls(frames, bars, per_bar, returning, min(frames, int(round(LEAD_IN_SECONDS * music.fps))),

@@ -207,7 +207,8 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
         describe = request.backend.plugin.describe
         how = describe(meta) if describe else ""
         loop = meta.get("loop")
-        looped = f", a loop of {loop['bars']} bars of {loop['beats_per_bar']} beats" if loop else ""
+        bars = loop and (f"{loop['bars']} bar" if loop["bars"] == 1 else f"{loop['bars']} bars")
+        looped = f", a loop of {bars} of {loop['beats_per_bar']} beats" if loop else ""
         done = (f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at "
                 f"{motion.fps:g} fps{looped} ({request.backend.name}, {how}{kept}; {seconds:.1f} s)")
         stderr_console.print(markup(done), highlight=False)
