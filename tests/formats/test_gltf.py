@@ -917,3 +917,18 @@ def test_a_glb_of_more_objects_than_any_dance_is_refused_before_it_is_decoded(tm
     with pytest.raises(MotionFormatError, match="more than 20,000 JSON objects"):
         read_motion(path)
     assert time.perf_counter() - started < 15
+
+
+@pytest.mark.fuzz_finding
+def test_a_json_chunk_longer_than_the_file_is_refused_before_it_is_allocated(tmp_path):
+    """Fuzzing (bvh,glb, seed 7): a glb whose JSON chunk claims 1-2 GB in a 70 kB file made the
+    object count's read, and pygltflib's, allocate the claim: a MemoryError under the fuzzer's cap."""
+    buffer = io.BytesIO()
+    write_glb(still(3), buffer)
+    forged = bytearray(buffer.getvalue())
+    forged[12:16] = struct.pack("<I", 2**31)
+    path = tmp_path / "forged.glb"
+    path.write_bytes(bytes(forged))
+    with pytest.raises(MotionFormatError) as raised:
+        read_glb(path)
+    assert str(raised.value) == f"{path}: damaged glb (its JSON chunk reaches past the end of the file)"

@@ -90,22 +90,26 @@ def _write(motion, writer, **kwargs) -> bytes:
 
 
 def motion_seeds() -> dict[str, list[bytes]]:
-    """BVH, NPZ, NPY, AIST++ pkl and glTF seeds from choreo's own writers (pickles in several protocols)."""
+    """BVH, NPZ, NPY, AIST++ pkl and glTF seeds from choreo's own writers (pickles in several protocols;
+    BVH and glb also under a root bone, the BVH also on Mixamo's rig)."""
     from choreo.formats.aistpp import write_aistpp_pkl
     from choreo.formats.bvh import write_bvh
     from choreo.formats.gltf import write_glb
     from choreo.formats.json_format import write_json
     from choreo.formats.npy import write_npy
     from choreo.formats.npz import write_npz
+    from choreo.formats.rigs import write_bvh_rig
     from choreo.formats.smpl_params import motion_to_smpl_params
 
     motion = _small_motion()
     params = {k: v.astype(np.float64) for k, v in motion_to_smpl_params(motion, 95.0).items()}
     params["smpl_loss"] = 0.0
     pickles = [pickle.dumps(params, protocol=p) for p in (0, 2, 5)]
-    return {"bvh": [_write(motion, write_bvh), _write(_small_motion(3, 1), write_bvh, units="cm")],
+    return {"bvh": [_write(motion, write_bvh), _write(_small_motion(3, 1), write_bvh, units="cm"),
+                    _write(motion, write_bvh, root_motion=True), _write(motion, write_bvh_rig, root_motion=True)],
             "npz": [_write(motion, write_npz)], "npy": [_write(motion, write_npy)],
-            "pkl": [_write(motion, write_aistpp_pkl)] + pickles, "glb": [_write(_small_motion(3, 2), write_glb)],
+            "pkl": [_write(motion, write_aistpp_pkl)] + pickles,
+            "glb": [_write(_small_motion(3, 2), write_glb), _write(_small_motion(3, 2), write_glb, root_motion=True)],
             "json": [_write(_small_motion(3, 3), write_json)]}
 
 

@@ -19,6 +19,7 @@ pelvis, such as a root bone, composed into it).
 from __future__ import annotations
 
 import json
+import os
 import struct
 from pathlib import Path
 
@@ -282,14 +283,19 @@ def _node_tracks(document, keyed: dict, frames: int):
 
 
 def _check_object_count(path) -> None:
-    """Refuse a glb whose JSON chunk holds more objects than any dance needs, counted on the plain
-    JSON before pygltflib builds a dataclass for each; damage is left to pygltflib's own refusal."""
+    """Refuse a glb whose JSON chunk reaches past the file's end (a forged length of gigabytes would
+    be allocated before anything is read), or holds more objects than any dance needs, counted on
+    the plain JSON before pygltflib builds a dataclass for each; other damage is left to
+    pygltflib's own refusal."""
     try:
         with open(path, "rb") as handle:
             head = handle.read(GLB_HEADER)
             if len(head) < GLB_HEADER or head[:4] != b"glTF" or struct.unpack_from("<I", head, 16)[0] != JSON_CHUNK:
                 return
-            pending = [json.loads(handle.read(struct.unpack_from("<I", head, 12)[0]))]
+            length = struct.unpack_from("<I", head, 12)[0]
+            if GLB_HEADER + length > os.fstat(handle.fileno()).st_size:
+                raise MotionFormatError(f"{path}: damaged glb (its JSON chunk reaches past the end of the file)")
+            pending = [json.loads(handle.read(length))]
     except (OSError, ValueError, RecursionError):
         return
     count = 0
