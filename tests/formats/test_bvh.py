@@ -643,3 +643,16 @@ def test_joints_choreo_cannot_place_are_refused_unless_they_stand_above_the_pelv
     assert str(error.value).startswith("x.bvh: skeleton is not SMPL-24 (found 25 joints: ")
     above = "HIERARCHY\nROOT stage\n{\nOFFSET 0 0 0\n" + text.replace("HIERARCHY\nROOT", "JOINT", 1).replace("MOTION", "}\nMOTION", 1)
     np.testing.assert_allclose(bvh.bvh_to_motion(bvh.parse_bvh(above)).joint_positions(), dance.joint_positions(), atol=1e-5)
+
+
+@pytest.mark.fuzz_finding
+@pytest.mark.parametrize("old, new, message", [
+    ("CHANNELS 3", "CHANNELS " + "9" * 5000, "bad channel count '" + "9" * 40 + "'"),
+    ("JOINT l_hip", "JOINT l_hip " + "x" * 5000, "unexpected '" + "x" * 40 + "' in HIERARCHY"),
+])
+def test_a_huge_token_in_the_hierarchy_is_cut_in_the_refusal(dance, old, new, message):
+    """Fuzzing (tests/fuzz/test_inputs.py after the root-motion seeds): a channel count of 5,000
+    nines made a refusal of 5,000 characters (counted as an internal error: one line, but not short)."""
+    with pytest.raises(MotionFormatError) as raised:
+        bvh.parse_bvh(smpl_text(dance).replace(old, new, 1), "x.bvh")
+    assert str(raised.value).endswith(message) and len(str(raised.value)) < 120

@@ -318,7 +318,7 @@ def _parse_hierarchy(head: str, name: str) -> list[BvhJoint]:
             try:
                 count = int(count_text)
             except ValueError:
-                raise MotionFormatError(f"{name}: line {line}: bad channel count {count_text!r}") from None
+                raise MotionFormatError(f"{name}: line {line}: bad channel count {count_text[:40]!r}") from None
             if not 0 <= count <= 6:  # a joint has at most 3 position and 3 rotation channels
                 raise MotionFormatError(f"{name}: line {line}: CHANNELS {count} (a joint has 0 to 6)")
             channels = [t.lower() for t, _ in take(count)]
@@ -327,7 +327,7 @@ def _parse_hierarchy(head: str, name: str) -> list[BvhJoint]:
                 raise MotionFormatError(f"{name}: line {line}: bad CHANNELS declaration")
             joints[stack[-1]].channels = channels
         else:
-            raise MotionFormatError(f"{name}: line {line}: unexpected {token!r} in HIERARCHY")
+            raise MotionFormatError(f"{name}: line {line}: unexpected {token[:40]!r} in HIERARCHY")
     if stack:
         raise MotionFormatError(f"{name}: hierarchy is truncated (unclosed braces)")
     if not joints:
