@@ -46,6 +46,10 @@ def test_a_loop_is_the_songs_whole_bars_from_its_start():
     waltz = Loop.of(music(), "Viennese waltz")
     assert (waltz.bars, waltz.beats_per_bar, waltz.frames) == (6, 3, 270)
     assert Loop.of(music(seconds=8.3), None).bars == 4  # the last bar's closing beat lies past the end, at the tempo
+    deaf = music()
+    deaf = Music(path=None, duration=deaf.duration, fps=30.0, features=deaf.features, beat_times=deaf.beat_times[:8],
+                 tempo=120.0)  # a tracker that stops hearing after 4 s: the bars go on at its tempo
+    assert Loop.of(deaf, None).frames == 300
     with pytest.raises(ParameterError, match=r"^--loop needs a whole bar \(4 beats\) in the song; it is shorter than one \(4 beats heard in 1.9 s\)$"):
         Loop.of(music(seconds=1.9), None)
 

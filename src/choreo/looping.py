@@ -53,9 +53,10 @@ class Loop:
         """The longest whole number of bars the song holds, measured on its beats from the start."""
         per_bar = WALTZ_BEATS_PER_BAR if style and "waltz" in style.lower() else BEATS_PER_BAR
         beats = heard = np.asarray(music.beat_times, dtype=np.float64)
-        if len(beats) > 1:  # the beats the song's end cuts off, at the tempo's own spacing
+        if len(beats) > 1:  # beats the tracker did not hear before the song's end, at the tempo's own spacing
             spacing = float(np.median(np.diff(beats)))
-            beats = np.r_[beats, beats[-1] + spacing * np.arange(1, per_bar + 1)]
+            missing = int(np.ceil(max(music.duration - beats[-1], 0.0) / spacing)) + per_bar
+            beats = np.r_[beats, beats[-1] + spacing * np.arange(1, missing + 1)]
         bar_starts = beats[::per_bar]
         lengths = bar_starts - beats[0] if len(beats) else bar_starts
         fits = np.flatnonzero(lengths <= music.duration + 1e-9)
