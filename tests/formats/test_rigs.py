@@ -56,6 +56,18 @@ def written(motion, tmp_path, **options):
     return path
 
 
+RIG_ROOT = ("HIERARCHY\nROOT mixamorig:Hips\n{\n\tOFFSET 0.000000 0.000000 0.000000\n"
+            "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n")
+
+
+def hips_under(head: str, above: str, hips_offset: str = "0.000000 0.000000 0.000000") -> str:
+    """A rig file's hierarchy with its hips a JOINT (rotations only) below ``above``, the opening
+    lines of joints the rig does not name; the caller closes their braces."""
+    assert RIG_ROOT in head
+    return head.replace(RIG_ROOT, f"HIERARCHY\n{above}JOINT mixamorig:Hips\n{{\n\tOFFSET {hips_offset}\n"
+                                  "\tCHANNELS 3 Zrotation Xrotation Yrotation\n", 1)
+
+
 def bone(name):
     return MIXAMO.bones.index(f"mixamorig:{name}")
 
@@ -327,11 +339,7 @@ def test_rig_file_may_wrap_the_hips_in_a_root_it_does_not_name(dance, tmp_path):
     """An exporter's extra root (no rotation, no offset) carrying the hips' positions changes nothing."""
     text = rig_text(dance)
     head, motion_part = text.split("MOTION", 1)
-    head = head.replace("HIERARCHY\nROOT mixamorig:Hips\n{\n\tOFFSET 0.000000 0.000000 0.000000\n"
-                        "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n",
-                        "HIERARCHY\nROOT Armature\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n"
-                        "JOINT mixamorig:Hips\n{\n\tOFFSET 0.000000 0.000000 0.000000\n"
-                        "\tCHANNELS 3 Zrotation Xrotation Yrotation\n", 1)
+    head = hips_under(head, "ROOT Armature\n{\nOFFSET 0 0 0\nCHANNELS 3 Xposition Yposition Zposition\n")
     assert head.count("Armature") == 1
     back = read_bvh_rig(save(tmp_path, head + "}\nMOTION" + motion_part), "mixamo")
     np.testing.assert_allclose(back.joint_positions(), dance.joint_positions(), atol=1e-4)
@@ -344,12 +352,8 @@ def test_rig_file_keeps_a_turned_and_offset_root_above_the_hips(dance, tmp_path)
     the file's own forward kinematics puts it (it used to be dropped, up to 1.3 m off)."""
     text = rig_text(dance)
     head, motion_part = text.split("MOTION", 1)
-    head = head.replace("HIERARCHY\nROOT mixamorig:Hips\n{\n\tOFFSET 0.000000 0.000000 0.000000\n"
-                        "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n",
-                        "HIERARCHY\nROOT Armature\n{\nOFFSET 0.5 0 -0.25\n"
-                        "CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n"
-                        "JOINT mixamorig:Hips\n{\n\tOFFSET 0.1 0.2 0.3\n"
-                        "\tCHANNELS 3 Zrotation Xrotation Yrotation\n", 1) + "}\n"
+    head = hips_under(head, "ROOT Armature\n{\nOFFSET 0.5 0 -0.25\n"
+                      "CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n", "0.1 0.2 0.3") + "}\n"
     lines = motion_part.split("\n")
     rows = [k for k, line in enumerate(lines) if line and line[0] in "-0123456789"]
     for n, k in enumerate(rows):
@@ -579,17 +583,14 @@ def test_rig_bone_names_match_ignoring_ascii_case_only(tmp_path):
 
 @pytest.mark.survivor
 def test_rig_file_composes_two_joints_above_the_hips(tmp_path):
-    """rigs._hips_in_world mutants 12 and 15: with two unnamed joints above the hips (a turned root
+    """bvh.in_world (was rigs._hips_in_world) mutants 12 and 15: with two unnamed joints above the hips (a turned root
     and a turned, offset child), both transforms are composed in, the file's root first."""
     dance = small_dance(frames=3)
     head, motion_part = rig_file_text(dance).split("MOTION", 1)
-    head = head.replace("HIERARCHY\nROOT mixamorig:Hips\n{\n\tOFFSET 0.000000 0.000000 0.000000\n"
-                        "\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n",
-                        "HIERARCHY\nROOT Armature\n{\nOFFSET 0.5 0 -0.25\n"
-                        "CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n"
-                        "JOINT Rig\n{\nOFFSET 0.2 -0.1 0.4\nCHANNELS 3 Zrotation Xrotation Yrotation\n"
-                        "JOINT mixamorig:Hips\n{\n\tOFFSET 0.1 0.2 0.3\n"
-                        "\tCHANNELS 3 Zrotation Xrotation Yrotation\n", 1) + "}\n}\n"
+    head = hips_under(head, "ROOT Armature\n{\nOFFSET 0.5 0 -0.25\n"
+                      "CHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\n"
+                      "JOINT Rig\n{\nOFFSET 0.2 -0.1 0.4\nCHANNELS 3 Zrotation Xrotation Yrotation\n",
+                      "0.1 0.2 0.3") + "}\n}\n"
     lines = motion_part.split("\n")
     rows = [k for k, line in enumerate(lines) if line and line[0] in "-0123456789"]
     assert len(rows) == 3

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.ndimage
-import scipy.signal
 
 
 def low_pass(values: np.ndarray, fps: float, cutoff_hz: float) -> np.ndarray:
     """Zero-phase low-pass of (T, ...) ``values`` along time: a second-order Butterworth run forwards
     and backwards, so nothing is delayed. The ends are padded by odd reflection over three periods
     of the cut-off, so a dance keeps its first and last frame and a steady drift is not bent there."""
+    import scipy.signal  # here, not at import: the formats import this module, and reading a file needs no filter
+
     values = np.asarray(values, dtype=np.float64)
     if len(values) < 4:
         return values.copy()
@@ -22,6 +22,8 @@ def low_pass(values: np.ndarray, fps: float, cutoff_hz: float) -> np.ndarray:
 def fixed_weights(fixed: np.ndarray, fps: float, blend_seconds: float) -> np.ndarray:
     """(T,) 1 away from fixed frames, 0 on them, a linear ramp over ``blend_seconds`` between: how much
     of a correction a pass may apply next to frames a user gave."""
+    import scipy.ndimage
+
     if not fixed.any():
         return np.ones(len(fixed))
     distance = scipy.ndimage.distance_transform_edt(~fixed)  # frames to the nearest fixed one, in O(T)
