@@ -33,7 +33,7 @@ import choreo
 import choreo.finishing
 from choreo.datasets import TEST, TRAIN, load_dataset, select_split
 from choreo.datasets.m2d import validation_clips
-from choreo.finishing import FootstepsConfig, PaceConfig, RootPathConfig
+from choreo.finishing import AccentConfig, FootstepsConfig, PaceConfig, RootPathConfig
 from choreo.metrics.beats import beat_align_score, motion_beats
 from choreo.metrics.fid import frechet_distance, motion_features, normalise_by_reference
 from choreo.metrics.protocol import SCORING_WINDOWS, scoring_windows
@@ -145,7 +145,7 @@ def report(paths: list[str]) -> None:
         print(f"\n{Path(path).stem} misses:", *target_failures(json.loads(Path(path).read_text())["songs"]), sep="\n  ")
 
 
-CONFIGS = {"footsteps": FootstepsConfig, "pace": PaceConfig, "root_path": RootPathConfig}
+CONFIGS = {"accent": AccentConfig, "footsteps": FootstepsConfig, "pace": PaceConfig, "root_path": RootPathConfig}
 
 
 def pass_configs(pairs: list[str]) -> dict:

@@ -38,21 +38,24 @@ MARKED = re.compile(r"^( *)(<!-- table: ([\w-]+) \(scripts/results_tables\.py\) 
 # Whole-song summary rows: label, run file (docs/results/whole_songs/NAME.json), columns shown in bold.
 SUMMARY = [
     ("SGMD before", "sgmd-before-2026-12-05", ()),
-    ("**SGMD now** (guidance 2, root path, pace)", "sgmd",
-     ("pace", "planted", "jerk", "root_jerk", "body_jerk", "misses")),
+    ("SGMD, guidance 2, root path, pace (this morning)", "sgmd-no-accent", ()),
+    ("**SGMD now** (+ accent)", "sgmd", ("planted", "jerk", "body_jerk", "beat_dip", "misses")),
     ("ChoreoGraph before", "graph-before-2026-12-05", ()),
-    ("**ChoreoGraph now** (root path, pace)", "graph", ("jerk", "root_jerk")),
+    ("ChoreoGraph, root path, pace (this morning)", "graph-no-floor-no-accent", ()),
+    ("**ChoreoGraph now** (+ floor, accent)", "graph", ("reach", "jerk", "body_jerk", "beat_dip", "misses")),
     ("SGMD before, no style", "sgmd-no-style-before-2026-12-05", ()),
+    ("SGMD this morning, no style", "sgmd-no-style-no-accent", ()),
     ("SGMD now, no style", "sgmd-no-style", ()),
     ("ChoreoGraph before, no style", "graph-no-style-before-2026-12-05", ()),
+    ("ChoreoGraph this morning, no style", "graph-no-style-no-floor-no-accent", ()),
     ("ChoreoGraph now, no style", "graph-no-style", ()),
 ]
 README = [
     ("**SGMD, bundled model, as `choreo generate` writes it** (DDIM 10, guidance 2 on the music and 2 on "
-     "the style; speed limit, root path, pace, footsteps, beat lock)", "sgmd"),
+     "the style; speed limit, root path, pace, accent, footsteps, beat lock)", "sgmd"),
     ("**ChoreoGraph, bundled models and repertoire, as `choreo graph` writes it** (K = 512, each seed a "
-     "take; the same passes)", "graph"),
-    ("SGMD with the defaults until 2026-12-04 (guidance 2.5, no root path or pace pass)", "sgmd-before-2026-12-05"),
+     "take, a 3 m floor; the same passes)", "graph"),
+    ("SGMD with the defaults until 2026-12-04 (guidance 2.5, no root path, pace or accent pass)", "sgmd-before-2026-12-05"),
 ]
 GUIDANCE = [("1", "sgmd-guidance-1-seed-1"), ("1.5 (seeds 0-2)", "sgmd-guidance-1.5-no-pace"),
             ("2 (seeds 0-2)", "sgmd-guidance-2-no-pace"), ("2.5 (before)", "sgmd-guidance-2.5-seed-1")]
@@ -76,6 +79,18 @@ VALIDATION_FINISHING = [("the defaults (3 Hz, 0.65, 1.25)", "validation-step1200
                         ("footsteps 0.8, seeds 3-5", "validation-step12000-footsteps-0.8-seeds-3-5"),
                         ("pace within 1.15 x, seeds 3-5", "validation-step12000-pace-1.15-seeds-3-5"),
                         ("pace within 1.4 x, seeds 3-5", "validation-step12000-pace-1.4-seeds-3-5")]
+VALIDATION_ACCENT = [("none (the defaults until now)", "validation-step12000-guidance-2"),
+                     ("0.1", "validation-step12000-accent-0.1"), ("0.2 (the default)", "validation-step12000-accent-0.2"),
+                     ("0.3", "validation-step12000-accent-0.3"),
+                     ("none, seeds 3-5", "validation-step12000-baseline-seeds-3-5"),
+                     ("0.2, seeds 3-5", "validation-step12000-accent-0.2-seeds-3-5")]
+VALIDATION_FEET = [("the plan + 0.35 of the glide and of the quick moves (the defaults)", "validation-step12000-guidance-2"),
+                   ("the plan + 0.5 of the quick moves", "validation-step12000-footsteps-split-1-0.5"),
+                   ("the plan + 0.7 of the quick moves", "validation-step12000-footsteps-split-1-0.7"),
+                   ("the plan + 0.15 of the glide + 0.7 of the quick moves", "validation-step12000-footsteps-split-0.85-0.7")]
+VALIDATION_GRAPH = [("no floor (the defaults until now)", "validation-graph-no-floor"),
+                    ("floor 3 m (the default)", "validation-graph-floor-3"), ("floor 2 m", "validation-graph-floor-2"),
+                    ("floor 3 m, accent 0.2 (the defaults now)", "validation-graph-floor-3-accent")]
 
 
 @cache
@@ -138,6 +153,21 @@ def whole_songs_validation() -> str:
 def whole_songs_validation_finishing() -> str:
     """docs/results.md, "Chosen on the validation clips": the finishing passes' settings."""
     return validation_table("finishing (root path cut-off, footsteps strength, pace bound)", VALIDATION_FINISHING)
+
+
+def whole_songs_validation_accent() -> str:
+    """docs/results.md, "Chosen on the validation clips": the accent's depth."""
+    return validation_table("accent depth", VALIDATION_ACCENT)
+
+
+def whole_songs_validation_feet() -> str:
+    """docs/results.md, "What the feet and the beats still miss": the planner with glide and quick moves apart."""
+    return validation_table("where the ankles go", VALIDATION_FEET)
+
+
+def whole_songs_validation_graph() -> str:
+    """docs/results.md, "Chosen on the validation clips": the graph's floor, then the accent."""
+    return validation_table("ChoreoGraph", VALIDATION_GRAPH)
 
 
 def validation_table(title: str, runs: list[tuple[str, str]]) -> str:
@@ -214,7 +244,10 @@ def whole_songs_guidance() -> str:
 TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": whole_songs_per_song,
           "whole-songs-outside": whole_songs_outside, "whole-songs-guidance": whole_songs_guidance,
           "whole-songs-validation": whole_songs_validation,
-          "whole-songs-validation-finishing": whole_songs_validation_finishing, "readme-results": readme_results}
+          "whole-songs-validation-finishing": whole_songs_validation_finishing,
+          "whole-songs-validation-accent": whole_songs_validation_accent,
+          "whole-songs-validation-feet": whole_songs_validation_feet,
+          "whole-songs-validation-graph": whole_songs_validation_graph, "readme-results": readme_results}
 
 
 def regenerated(text: str) -> str:

@@ -55,7 +55,8 @@ MAX_WARP_SMOOTHING = float(CLIP_FRAMES)
 MAX_TAKE_VARIATION = 10.0
 GRAPH_BOUNDS = {"top_k": (1, math.inf), "dtw_stride": (1, math.inf), "blend_frames": (0, math.inf),
                 "warp_smoothing": (0, MAX_WARP_SMOOTHING), "take_variation": (0, MAX_TAKE_VARIATION),
-                "path_cost": (0, math.inf), "key_cost": (0, math.inf)}
+                "path_cost": (0, math.inf), "key_cost": (0, math.inf), "floor_radius": (0, math.inf),
+                "floor_cost": (0, math.inf)}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -81,10 +82,20 @@ class GraphConfig:
     repeat_memory: int = 30  # seconds a played node's source frames stay "recent"
     path_cost: float = 4.0  # under constraints: per squared metre between a node's root and the given root
     key_cost: float = 4.0  # under constraints: per squared metre of mean joint distance from a given pose
+    # Not in the paper: without a given root path, a node ending further than floor_radius metres from where the dance
+    # started costs floor_cost per squared metre beyond it. Joined clips travel like a random walk, and real dancers
+    # stay on their floor (docs/graph.md, "Staying on the floor").
+    floor_radius: float = option(3.0, "Metres from its start a dance without a path keeps within (the walk prefers "
+                                      "clips that stay there); 0: no floor, the walk wanders.")
+    floor_cost: float = 4.0
     dynamic: bool = option(True, "The dynamic graph; --motion-graph: the paper's plain motion graph ablation (first "
                                  "node of each segment only).", "--dynamic-graph/--motion-graph")
     retempo: bool = option(True, "Re-time each clip onto the music; --no-retempo: the ablation using each clip's "
                                  "middle 4 s unwarped.", "--retempo/--no-retempo")
+
+    @property
+    def keeps_floor(self) -> bool:
+        return self.floor_cost > 0 and self.floor_radius > 0
 
     def __post_init__(self):
         from choreo.errors import ParameterError

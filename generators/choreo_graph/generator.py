@@ -17,7 +17,7 @@ from choreo.motion import Motion
 from choreo.music.mel import music_log_mel
 
 from . import plugin
-from .config import NODE_FRAMES, GraphConfig
+from .config import FPS, NODE_FRAMES, GraphConfig
 from .graph import DynamicGraph, Node, assemble, music_windows, played_clips, select_candidates, warp_candidates
 from .guide import Guide
 from .model import ChoreoGraphModel, load_checkpoint
@@ -70,7 +70,7 @@ class ChoreoGraphGenerator(Generator):
         path = self.walk(mel, config, allowed, report, seed=request.seed or 0, guide=guide)
         motion = self.assemble(path, mel, config, guide)  # as many frames as the mel, i.e. the music
         walk_error = None
-        if guide is not None:  # what the walk did not reach exactly, bent onto the constraints
+        if guide is not None and guide.constrained:  # what the walk did not reach exactly, bent onto the constraints
             walk_error = guide.root_error(motion)
             motion = displace_motion(motion, request.constraints, root_reach=len(mel))
         report(1.0)
@@ -79,15 +79,17 @@ class ChoreoGraphGenerator(Generator):
             "style": request.style, "genre": genre, "seed": request.seed, "top_k": config.top_k,
             "dynamic_graph": config.dynamic, "retempo": config.retempo,
             "clips": played_clips(path, self.repertoire),
-            "constrained_fraction": None if guide is None else round(request.constraints.known_fraction(), 4),
+            "constrained_fraction": None if walk_error is None else round(request.constraints.known_fraction(), 4),
             "walk_root_error_m": None if walk_error is None else round(walk_error, 4),
         }  # fmt: skip
         return motion
 
     def guide(self, constraints: Constraints | None, num_frames: int, config: GraphConfig) -> Guide | None:
-        """The walk's guide under ``constraints`` (None without any)."""
+        """The walk's guide under ``constraints``, or keeping a free walk on its floor (None: neither)."""
         if constraints is None or constraints.is_empty:
-            return None
+            if not config.keeps_floor:
+                return None
+            constraints = Constraints.none(num_frames, FPS)
         if constraints.num_frames != num_frames:
             raise ParameterError(f"constraints cover {constraints.num_frames} frames, the song {num_frames}")
         return Guide(constraints, self.repertoire, config)

@@ -119,7 +119,7 @@ class DynamicGraph:
         self.repertoire, self.config, self.guide = repertoire, config, guide
         # Every seed of a free dance is a take; under constraints seed 0 is the greedy walk, which keeps closer to
         # them with lower PFC (docs/results.md, "The graph under constraints").
-        varied = config.take_variation > 0 and (seed != 0 or guide is None)
+        varied = config.take_variation > 0 and (seed != 0 or guide is None or not guide.constrained)
         # numpy's generators take no negative seed, and generate takes -1: the same 64 bits, wrapped
         self.rng = np.random.default_rng(seed % 2**64) if varied else None
         self.segments: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # second -> (clips (K,), warps (K, 120))

@@ -1,4 +1,6 @@
-"""Constraints on the graph's walk: a root path to follow, poses to pass through, frames to keep.
+"""Constraints on the graph's walk: a root path to follow, poses to pass through, frames to keep,
+and, where no root path is given, the floor: a walk that strays further than ``floor_radius`` from
+its start is priced back towards it.
 
 The dynamic graph picks one node per second. Under constraints each candidate node is also
 priced by how far from the given root positions it would carry the dancer and how unlike the
@@ -56,6 +58,8 @@ class Guide:
             self.poses[self.posed] = frame_local_positions(positions)
             facing[self.posed] = facing_yaw(positions)
         self.start = self.start_placement(facing)
+        self.constrained = not constraints.is_empty
+        self.floored = config.keeps_floor and not self.root_known.any()
         self.placement: Placement | None = None
         self.candidates: tuple[np.ndarray, np.ndarray] | None = None  # (angles, offsets) of the last step
 
@@ -82,6 +86,10 @@ class Guide:
             played = np.clip(np.rint(frames[:, posed - t * NODE_FRAMES]).astype(int), 0, self.repertoire.poses.shape[1] - 1)
             poses = self.repertoire.poses[clips[:, None], played].astype(np.float32)  # (C, F, 24, 3)
             cost += self.config.key_cost * np.square(poses - self.poses[posed]).sum(-1).mean((-1, -2))
+        if self.floored:
+            ends = self.placed_roots(clips, frames[:, -1:], *self.candidates)[:, 0]
+            beyond = np.maximum(np.linalg.norm(ends - self.start[0], axis=-1) - self.config.floor_radius, 0.0)
+            cost += self.config.floor_cost * np.square(beyond)
         return cost
 
     def root_error(self, motion: Motion) -> float | None:

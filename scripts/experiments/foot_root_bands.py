@@ -35,7 +35,9 @@ def bands(positions: np.ndarray) -> dict[str, float]:
     slow_foot, slow_root = low_pass(faster, FPS, SPLIT_HZ), low_pass(root, FPS, SPLIT_HZ)
     return {"foot~root": np.corrcoef(faster, root)[0, 1], "slow": np.corrcoef(slow_foot, slow_root)[0, 1],
             "fast": np.corrcoef(faster - slow_foot, root - slow_root)[0, 1],
-            "faster foot m/s": faster.mean(), "root m/s": root.mean()}
+            "faster foot m/s": faster.mean(), "root m/s": root.mean(),
+            "faster foot above 0.5 Hz, s.d.": (faster - slow_foot).std(),
+            "faster foot 10th / 90th percentile": "{:.2f} / {:.2f}".format(*np.percentile(faster, [10, 90]))}
 
 
 def main() -> None:
@@ -43,18 +45,21 @@ def main() -> None:
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--songs", nargs="+", default=["DANCE_C_4", "DANCE_R_3"])
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--checkpoint", default=None, help="an SGMD checkpoint (default: the bundled one)")
     args = parser.parse_args()
     clips = {c.name: c for c in load_dataset(args.data)}
-    backend = choreo.load_backend("sgmd")
-    print("| song | dancer | foot~root | below 0.5 Hz | above | faster foot m/s | root m/s |")
-    print("| --- | --- | ---: | ---: | ---: | ---: | ---: |")
+    backend = choreo.load_backend("sgmd", args.checkpoint)
+    print("| song | dancer | foot~root | below 0.5 Hz | above | faster foot m/s | root m/s | faster foot above 0.5 Hz, "
+          "s.d. | faster foot 10th / 90th percentile |")
+    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for name in args.songs:
         clip = clips[name]
         music = song_of(clip)
         dances = {"real": clip.motion.joint_positions()[: len(music.features)],
                   "SGMD": choreo.dance(music, backend, style=clip.genre, seed=args.seed).joint_positions()}
         for who, positions in dances.items():
-            print(f"| {name} | {who} | " + " | ".join(f"{v:.3f}" for v in bands(positions).values()) + " |")
+            print(f"| {name} | {who} | " + " | ".join(v if isinstance(v, str) else f"{v:.3f}"
+                                                     for v in bands(positions).values()) + " |")
 
 
 if __name__ == "__main__":

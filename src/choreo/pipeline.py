@@ -41,6 +41,7 @@ class Finishing:
     speed_limit: bool = option(True, "Spread turns and dashes faster than real dancers move over the frames around them.")
     root_path: bool = option(True, "Smooth the root's travel on the floor, removing its wobble (given frames stay).")
     pace: bool = option(True, "Bring a whole song's travel toward the real pace of its genre (short dances keep theirs).")
+    accent: bool = option(True, "Ease into and out of each motion beat, marking it as clearly as real dancers do.")
     footsteps: bool = option(True, "Plan steps: each foot stands until the body leaves it, then steps (legs by IK).")
     beat_lock: bool = option(True, "Re-time the dance so its motion beats land on the music's beats (given frames stay).")
     foot_lock: bool = option(False, "Let planted feet carry the body instead of sliding (docs/results.md, \"Feet\").")

@@ -5,8 +5,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from choreo.finishing import (BeatLockConfig, FootLockConfig, FootstepsConfig, PaceConfig, RootPathConfig,
-                              SpeedLimitConfig, beat_lock, finish, foot_lock, footsteps, pace, root_path, speed_limit)
+from choreo.finishing import (AccentConfig, BeatLockConfig, FootLockConfig, FootstepsConfig, PaceConfig, RootPathConfig,
+                              SpeedLimitConfig, accent, beat_lock, finish, foot_lock, footsteps, pace, root_path,
+                              speed_limit)
 from choreo.pipeline import Finishing
 
 from ..motion.helpers import wobbly_walk
@@ -26,6 +27,7 @@ def by_hand(motion, beats, on: Finishing, fixed, configs: dict):
     motion = speed_limit(motion, fixed, configs["speed_limit"]) if on.speed_limit else motion
     motion = root_path(motion, fixed, configs["root_path"]) if on.root_path else motion
     motion = pace(motion, fixed, configs["pace"]) if on.pace else motion
+    motion = accent(motion, fixed, configs["accent"]) if on.accent else motion
     motion = footsteps(motion, fixed, configs["footsteps"]) if on.footsteps else motion
     motion = beat_lock(motion, beats, fixed, configs["beat_lock"]).motion if on.beat_lock else motion
     motion = foot_lock(motion, fixed, configs["foot_lock"]) if on.foot_lock else motion
@@ -35,9 +37,9 @@ def by_hand(motion, beats, on: Finishing, fixed, configs: dict):
 
 
 CONFIGS = {"speed_limit": SpeedLimitConfig(joint_speed=1.5), "root_path": RootPathConfig(cutoff_hz=1.5),
-           "pace": PaceConfig(max_scale=1.5), "footsteps": FootstepsConfig(strength=0.3),
+           "pace": PaceConfig(max_scale=1.5), "accent": AccentConfig(depth=0.4), "footsteps": FootstepsConfig(strength=0.3),
            "beat_lock": BeatLockConfig(max_shift_seconds=0.2), "foot_lock": FootLockConfig(speed_threshold=2.0)}
-ONLY = dict(speed_limit=False, root_path=False, pace=False, footsteps=False, beat_lock=False, foot_lock=False)
+ONLY = dict(speed_limit=False, root_path=False, pace=False, accent=False, footsteps=False, beat_lock=False, foot_lock=False)
 
 
 @pytest.mark.parametrize("on", [

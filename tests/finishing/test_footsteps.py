@@ -135,7 +135,7 @@ def test_other_skeletons_and_short_dances_pass_through():
 def test_finish_runs_the_planner_when_asked():
     motion = glider()
     plain = finish(motion, np.array([]), Finishing(beat_lock=False, speed_limit=False, footsteps=False, root_path=False,
-                                                   pace=False))
+                                                   pace=False, accent=False))
     stepped = finish(motion, np.array([]), Finishing(beat_lock=False, speed_limit=False, root_path=False))  # on by default
     assert plain is motion
     before, after = (stepping(m.joint_positions(), FPS) for m in (motion, stepped))

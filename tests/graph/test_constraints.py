@@ -133,3 +133,18 @@ def test_the_cli_dances_a_path_and_an_inpainting_with_the_graph(tmp_path):
     again = read_motion(fixed)
     np.testing.assert_allclose(again.root_positions[:60], walk.root_positions[:60], atol=1e-5)
     assert not np.allclose(again.root_positions[60:120], walk.root_positions[60:120], atol=1e-3)
+
+
+def test_a_free_walk_is_kept_on_its_floor(graph, music):
+    """Joined clips travel like a random walk: without a root path the walk prices a node that
+    ends beyond ``floor_radius`` of the start, and the dance stays nearer it (no constraint is
+    reported, no frame is bent)."""
+    def reach(dance):
+        return np.linalg.norm(dance.root_positions[:, [0, 2]] - dance.root_positions[0, [0, 2]], axis=-1).max()
+
+    wandering = dance_under(graph, music, None, floor_cost=0.0)
+    kept = dance_under(graph, music, None, floor_radius=0.25, floor_cost=100.0)
+    assert reach(wandering) > 1.0 and reach(kept) < 0.6 * reach(wandering)
+    assert kept.metadata["constrained_fraction"] is None and kept.metadata["walk_root_error_m"] is None
+    no_floor = dance_under(graph, music, None, floor_radius=0.0)  # --floor-radius 0: the walk as it was
+    np.testing.assert_array_equal(no_floor.root_positions, wandering.root_positions)

@@ -402,9 +402,11 @@ def test_take_variation_needs_a_weight_and_under_constraints_a_seed():
     rep = toy_repertoire()
     assert DynamicGraph(rep, GraphConfig(), seed=0).rng is not None
     assert DynamicGraph(rep, GraphConfig(take_variation=0.0), seed=4).rng is None
-    guide = SimpleNamespace()  # any guide: the walk is under constraints
+    guide = SimpleNamespace(constrained=True)  # the walk is under constraints
     assert DynamicGraph(rep, GraphConfig(), seed=0, guide=guide).rng is None  # the greedy walk
     assert DynamicGraph(rep, GraphConfig(), seed=3, guide=guide).rng is not None
+    floor_only = SimpleNamespace(constrained=False)  # a free walk kept on its floor is a take like any other
+    assert DynamicGraph(rep, GraphConfig(), seed=0, guide=floor_only).rng is not None
 
 
 def path_of(spec):

@@ -1,7 +1,8 @@
 """Passes every generated dance goes through after its backend: speed limit (no joint faster
 than real dancers move), root path (travel without wobble), pace (a whole song's travel at its
-genre's pace), footsteps (feet that stand and step instead of gliding), beat lock (re-timing onto
-the music's beats) and, when asked, foot lock (planted feet carry the body). Each pass has a
+genre's pace), accent (motion beats as pronounced as real dancers'), footsteps (feet that stand
+and step instead of gliding), beat lock (re-timing onto the music's beats) and, when asked, foot
+lock (planted feet carry the body). Each pass has a
 module, a function and a config of one name; ``choreo.pipeline.Finishing`` turns them on and off."""
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..motion import Motion
+from .accent import AccentConfig, accent
 from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
 from .foot_lock import FootLockConfig, foot_lock
 from .footsteps import FootstepsConfig, footsteps
@@ -32,7 +34,8 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
 
     The order: the speed limit first, so that a glitch is not taken for a motion beat, and last,
     since re-timing stretches speeds. The root path and the pace before the footsteps, which plant
-    the feet along the travel as it will be. Footsteps before the beat lock: they move the motion
+    the feet along the travel as it will be. The accent before the footsteps and the beat lock, which
+    plan the feet and lock the beats of the dance as it will be timed. Footsteps before the beat lock: they move the motion
     beats (a leg's swing is part of the body's speed), and a re-timing keeps a standing foot
     standing (docs/results.md, "Feet")."""
     from ..pipeline import Finishing
@@ -42,7 +45,7 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
     fixed = constraints.fixed_frames() if hasattr(constraints, "fixed_frames") else constraints
     timed = fixed if anchors is None else np.asarray(anchors, bool) | (False if fixed is None else np.asarray(fixed, bool))
     passes = ((on.speed_limit, speed_limit, fixed), (on.root_path, root_path, fixed), (on.pace, pace, fixed),
-              (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, timed), (on.foot_lock, foot_lock, fixed))
+              (on.accent, accent, timed), (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, timed), (on.foot_lock, foot_lock, fixed))
     for enabled, run, kept in passes:
         if enabled:
             motion = _run(run, motion, music_beat_frames, kept, settings.get(run.__name__))
@@ -59,6 +62,6 @@ def _run(run, motion: Motion, music_beat_frames: np.ndarray, fixed, config) -> M
     return run(motion, fixed, **extra)
 
 
-__all__ = ["BeatLockConfig", "BeatLockResult", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RootPathConfig",
-           "SpeedLimitConfig", "beat_lock", "finish", "foot_lock", "footsteps", "lock_warp", "pace", "root_path",
+__all__ = ["AccentConfig", "BeatLockConfig", "BeatLockResult", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RootPathConfig",
+           "SpeedLimitConfig", "accent", "beat_lock", "finish", "foot_lock", "footsteps", "lock_warp", "pace", "root_path",
            "speed_limit"]
