@@ -328,6 +328,8 @@ def test_seeds_give_other_takes_and_the_dance_lists_its_clips(tiny_graph):
     (("--take-variation", "nan"), "--take-variation takes a finite number"),
     (("--take-variation", "inf"), "--take-variation takes a finite number"),
     (("--take-variation", "1e9"), "take_variation must be 0 to 10"),
+    (("--floor-radius", "nan"), "--floor-radius takes a finite number"),
+    (("--floor-radius", "-1"), "floor_radius must be 0 to inf"),
 ])
 def test_graph_numbers_are_refused_by_name_before_any_work(tmp_path, capsys, flags, words):
     """Issue 48, items 10 and 12: inf and 1e308 were exit 70, NaN was accepted."""
