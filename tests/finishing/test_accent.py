@@ -59,3 +59,25 @@ def test_depth_zero_is_the_dance_itself_and_bad_depths_are_refused():
     for depth in (-0.1, 1.0, float("nan")):
         with pytest.raises(ParameterError):
             AccentConfig(depth=depth)
+
+
+def test_dances_without_two_motion_beats_or_free_frames_are_left_as_they_are():
+    motion = swaying(seconds=3.0)
+    assert accent(motion, np.ones(motion.num_frames, bool)) is motion  # every frame given
+    assert accent(motion.slice_frames(0, 2)).num_frames == 2
+    still = wobbly_walk(seconds=2.0, speed=0.0, wobble=0.0)  # the arms swing, nothing else: one beat at most
+    still.rotations[:] = still.rotations[:1]
+    assert len(motion_beats(still.joint_positions())) < 2 and accent(still) is still
+
+
+def test_a_backends_clip_timeline_follows_the_re_timing():
+    from choreo.finishing.beat_lock import retimed_span
+
+    motion = swaying(seconds=6.0)
+    spans = [[0, 40], [41, 100], [101, 179]]
+    motion.metadata = {"clips": [{"clip": str(i), "output_frames": list(span)} for i, span in enumerate(spans)]}
+    out = accent(motion, None, AccentConfig(depth=0.9))
+    source = accent_warp(motion_beats(motion.joint_positions()), motion.num_frames, 0.9, np.zeros(180, bool))
+    expected = [retimed_span(span, source) for span in spans]
+    assert [clip["output_frames"] for clip in out.metadata["clips"]] == expected != spans
+    assert [clip["output_frames"] for clip in motion.metadata["clips"]] == spans  # the input's metadata untouched
