@@ -68,7 +68,9 @@ VALIDATION = [("1.5", "validation-step10000-guidance-1.5"), ("2 (the default)", 
               ("1.5, step 12,000, with the accent", "validation-step12000-guidance-1.5-accent"),
               ("2, step 12,000, with the accent", "validation-step12000-accent-0.2"),
               ("1.5, training seed 1, step 10,000, with the accent", "validation-seed1-step10000-guidance-1.5"),
-              ("2, training seed 1, step 10,000, with the accent", "validation-seed1-step10000-guidance-2")]
+              ("2, training seed 1, step 10,000, with the accent", "validation-seed1-step10000-guidance-2"),
+              ("1.5, training seed 1, step 12,000, with the accent", "validation-seed1-step12000-guidance-1.5"),
+              ("2, training seed 1, step 12,000, with the accent", "validation-seed1-step12000-guidance-2")]
 VALIDATION_FINISHING = [("the defaults (3 Hz, 0.65, 1.25)", "validation-step12000-guidance-2"),
                         ("root path 2 Hz", "validation-step12000-root-path-2hz"),
                         ("root path 4 Hz", "validation-step12000-root-path-4hz"),
