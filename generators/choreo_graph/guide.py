@@ -49,9 +49,10 @@ class Guide:
         self.root_known = constraints.root_known[:, [0, 2]].all(1)
         self.root = constraints.root * np.array([1.0, 0.0, 1.0])  # floor positions
         self.posed = constraints.joints_known.all(1) & constraints.root_known[:, 1]
-        self.poses = np.zeros((self.num_frames, SMPL24.num_joints, 3), np.float32)
+        self.poses = None  # (T, 24, 3) where poses are given: a free walk or a path has none to hold
         facing = np.zeros(self.num_frames)
         if self.posed.any():  # forward kinematics on the posed frames only (a path has none)
+            self.poses = np.zeros((self.num_frames, SMPL24.num_joints, 3), np.float32)
             given = Motion(constraints.root[self.posed], constraints.rotations[self.posed], fps=constraints.fps,
                            skeleton=SMPL24.with_offsets(repertoire.offsets))
             positions = given.joint_positions()
