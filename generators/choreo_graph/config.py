@@ -85,8 +85,8 @@ class GraphConfig:
     # Not in the paper: without a given root path, a node ending further than floor_radius metres from where the dance
     # started costs floor_cost per squared metre beyond it. Joined clips travel like a random walk, and real dancers
     # stay on their floor (docs/graph.md, "Staying on the floor").
-    floor_radius: float = option(3.0, "Metres from its start a dance without a path keeps within (the walk prefers "
-                                      "clips that stay there); 0: no floor, the walk wanders.")
+    floor_radius: float = option(3.0, "Metres from its start beyond which a dance without a path prefers clips that "
+                                      "head back (a soft edge: it may stray a metre past); 0: no floor, it wanders.")
     floor_cost: float = 4.0
     dynamic: bool = option(True, "The dynamic graph; --motion-graph: the paper's plain motion graph ablation (first "
                                  "node of each segment only).", "--dynamic-graph/--motion-graph")
