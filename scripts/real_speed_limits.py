@@ -7,7 +7,8 @@ Over every M2D clip at 30 fps: the fastest joint's speed in each frame and the r
 the floor per frame, as percentiles (the speed limit uses the 99.9th), with the fastest frame.
 Then the train split's pace along the ground track (choreo.motion.travel), the median per genre
 and over all clips, and how far excerpts of 5-40 s (half-overlapping) stray from their genre's
-median: the length from which a pace is a property of the dance.
+median: the length from which a pace is a property of the dance. Last, the train split's feet by
+genre (choreo.metrics.stepping): the planted share and foot~root the footsteps' strength is set by.
 """
 
 from __future__ import annotations
@@ -37,7 +38,9 @@ def main() -> None:
         values = np.concatenate(values)
         p99, p999 = np.percentile(values, [99, 99.9])
         print(f"{name}: 99th percentile {p99:.3f}, 99.9th {p999:.3f}, fastest {values.max():.3f} ({len(values)} frames)")
-    print_paces([clip for clip in load_dataset(args.data) if clip.split == TRAIN])
+    train = [clip for clip in load_dataset(args.data) if clip.split == TRAIN]
+    print_paces(train)
+    print_feet(train)
 
 
 def print_paces(clips) -> None:
@@ -56,6 +59,17 @@ def print_paces(clips) -> None:
         within = np.mean(np.abs(np.asarray(ratios) - 1) <= 0.2)
         print(f"{seconds} s excerpts: {low:.2f}-{high:.2f} x the genre's median (10th-90th percentile), "
               f"{100 * within:.0f} % within 20 % ({len(ratios)} excerpts)")
+
+
+def print_feet(clips) -> None:
+    from choreo.metrics.stepping import stepping
+
+    for genre in sorted({clip.genre for clip in clips}):
+        feet = [stepping(c.motion.joint_positions(), c.motion.fps) for c in clips if c.genre == genre]
+        planted, foot_root = [f.planted_share for f in feet], [f.foot_root_correlation for f in feet]
+        print(f"train {genre} feet ({len(feet)} clips), median [range]: planted {np.median(planted):.2f} "
+              f"[{min(planted):.2f}-{max(planted):.2f}], foot~root {np.median(foot_root):.2f} "
+              f"[{min(foot_root):.2f}-{max(foot_root):.2f}]")
 
 
 if __name__ == "__main__":

@@ -39,10 +39,12 @@ MARKED = re.compile(r"^( *)(<!-- table: ([\w-]+) \(scripts/results_tables\.py\) 
 SUMMARY = [
     ("SGMD before", "sgmd-before-2026-12-05", ()),
     ("SGMD, guidance 2, root path, pace (this morning)", "sgmd-no-accent", ()),
-    ("**SGMD now** (+ accent)", "sgmd", ("planted", "jerk", "body_jerk", "beat_dip", "misses")),
+    ("SGMD + accent (the fourth session)", "sgmd-latin-footsteps-0.65", ()),
+    ("**SGMD now** (+ Latin footsteps 0.75)", "sgmd", ("foot_root",)),
     ("ChoreoGraph before", "graph-before-2026-12-05", ()),
     ("ChoreoGraph, root path, pace (this morning)", "graph-no-floor-no-accent", ()),
-    ("**ChoreoGraph now** (+ floor, accent)", "graph", ("reach", "jerk", "body_jerk", "beat_dip", "misses")),
+    ("ChoreoGraph + floor, accent (the fourth session)", "graph-latin-footsteps-0.65", ()),
+    ("**ChoreoGraph now** (+ Latin footsteps 0.75)", "graph", ("foot_root", "misses")),
     ("SGMD before, no style", "sgmd-no-style-before-2026-12-05", ()),
     ("SGMD this morning, no style", "sgmd-no-style-no-accent", ()),
     ("SGMD now, no style", "sgmd-no-style", ()),
@@ -87,6 +89,7 @@ VALIDATION_FINISHING = [("the defaults (3 Hz, 0.65, 1.25)", "validation-step1200
                         ("pace within 1.4 x, seeds 3-5", "validation-step12000-pace-1.4-seeds-3-5")]
 VALIDATION_ACCENT = [("none (the defaults until now)", "validation-step12000-guidance-2"),
                      ("0.1", "validation-step12000-accent-0.1"), ("0.2 (the default)", "validation-step12000-accent-0.2"),
+                     ("0.2, footsteps 0.75 in cha-cha and rumba (the defaults now)", "validation-step12000-latin-0.75"),
                      ("0.3", "validation-step12000-accent-0.3"),
                      ("none, seeds 3-5", "validation-step12000-baseline-seeds-3-5"),
                      ("0.2, seeds 3-5", "validation-step12000-accent-0.2-seeds-3-5")]
@@ -96,7 +99,17 @@ VALIDATION_FEET = [("the plan + 0.35 of the glide and of the quick moves (the de
                    ("the plan + 0.15 of the glide + 0.7 of the quick moves", "validation-step12000-footsteps-split-0.85-0.7")]
 VALIDATION_GRAPH = [("no floor (the defaults until now)", "validation-graph-no-floor"),
                     ("floor 3 m (the default)", "validation-graph-floor-3"), ("floor 2 m", "validation-graph-floor-2"),
-                    ("floor 3 m, accent 0.2 (the defaults now)", "validation-graph-floor-3-accent")]
+                    ("floor 3 m, accent 0.2", "validation-graph-floor-3-accent"),
+                    ("floor 3 m, accent 0.2, footsteps 0.75 in cha-cha and rumba (the defaults now)",
+                     "validation-graph-latin-0.75")]
+VALIDATION_LATIN = [("SGMD, 0.65 (the default until now)", "validation-latin-footsteps-0.65"),
+                    ("SGMD, 0.75 (the default now)", "validation-latin-footsteps-0.75"),
+                    ("SGMD, 0.85", "validation-latin-footsteps-0.85"), ("SGMD, 1", "validation-latin-footsteps-1"),
+                    ("SGMD, 0.65, seeds 3-5", "validation-latin-footsteps-0.65-seeds-3-5"),
+                    ("SGMD, 0.75, seeds 3-5", "validation-latin-footsteps-0.75-seeds-3-5"),
+                    ("ChoreoGraph, 0.65", "validation-graph-latin-footsteps-0.65"),
+                    ("ChoreoGraph, 0.75", "validation-graph-latin-footsteps-0.75"),
+                    ("ChoreoGraph, 0.85", "validation-graph-latin-footsteps-0.85")]
 
 
 @cache
@@ -176,6 +189,11 @@ def whole_songs_validation_graph() -> str:
     return validation_table("ChoreoGraph", VALIDATION_GRAPH)
 
 
+def whole_songs_validation_latin() -> str:
+    """docs/results.md, "Feet": the footsteps' strength on the Latin validation songs."""
+    return validation_table("footsteps strength, cha-cha and rumba", VALIDATION_LATIN)
+
+
 def validation_table(title: str, runs: list[tuple[str, str]]) -> str:
     """Runs on the validation clips, real dancers first: means over songs, FIDs, targets missed."""
     header = [title, "pace m/s", "reach m", "planted", "foot~root", "jerk", "root jerk", "body jerk",
@@ -253,7 +271,8 @@ TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": wh
           "whole-songs-validation-finishing": whole_songs_validation_finishing,
           "whole-songs-validation-accent": whole_songs_validation_accent,
           "whole-songs-validation-feet": whole_songs_validation_feet,
-          "whole-songs-validation-graph": whole_songs_validation_graph, "readme-results": readme_results}
+          "whole-songs-validation-graph": whole_songs_validation_graph,
+          "whole-songs-validation-latin": whole_songs_validation_latin, "readme-results": readme_results}
 
 
 def regenerated(text: str) -> str:

@@ -6,7 +6,9 @@ Issue 45 (docs/results.md, "What the feet and the beats still miss"). For each M
 dancer and SGMD's whole dance (the CLI's defaults, the genre as style): the correlation of the
 faster foot's horizontal speed with the root's (foot~root), then of their parts below 0.5 Hz and
 above it, and the mean speeds of both. A skater's feet follow the body at every time scale; a
-stepping dancer's only over seconds, as the body travels.
+stepping dancer's only over seconds, as the body travels. Last, which comes first within a step:
+the lag (frames, + when the root follows the foot) at which the two speeds' parts above 0.5 Hz
+correlate most, within half a second, and how fast the faster foot moves around the pelvis.
 """
 
 from __future__ import annotations
@@ -27,6 +29,14 @@ sys.path.insert(0, str(REPO / "scripts"))
 from evaluate_whole_songs import song_of  # noqa: E402
 
 FPS, SPLIT_HZ = 30.0, 0.5
+LAGS = range(-15, 16)  # frames: half a second either way
+
+
+def lagged_correlation(foot: np.ndarray, root: np.ndarray, lag: int) -> float:
+    """Correlation of the foot's speed with the root's ``lag`` frames later."""
+    if lag < 0:
+        return lagged_correlation(root, foot, -lag)
+    return float(np.corrcoef(foot[: len(foot) - lag], root[lag:])[0, 1])
 
 
 def bands(positions: np.ndarray) -> dict[str, float]:
@@ -37,7 +47,16 @@ def bands(positions: np.ndarray) -> dict[str, float]:
             "fast": np.corrcoef(faster - slow_foot, root - slow_root)[0, 1],
             "faster foot m/s": faster.mean(), "root m/s": root.mean(),
             "faster foot above 0.5 Hz, s.d.": (faster - slow_foot).std(),
-            "faster foot 10th / 90th percentile": "{:.2f} / {:.2f}".format(*np.percentile(faster, [10, 90]))}
+            "faster foot 10th / 90th percentile": "{:.2f} / {:.2f}".format(*np.percentile(faster, [10, 90])),
+            "root after foot: lag, correlation": lead_of(faster - slow_foot, root - slow_root),
+            "faster foot around the pelvis, median m/s": np.median(np.maximum(*foot_speeds(positions - positions[:, :1], FPS)))}
+
+
+def lead_of(foot: np.ndarray, root: np.ndarray) -> str:
+    """"lag frames, correlation" at the lag where the root's speed follows the foot's most closely."""
+    correlations = {lag: lagged_correlation(foot, root, lag) for lag in LAGS}
+    best = max(correlations, key=correlations.get)
+    return f"{best:+d}, {correlations[best]:.2f} (at 0: {correlations[0]:.2f})"
 
 
 def main() -> None:
@@ -50,8 +69,9 @@ def main() -> None:
     clips = {c.name: c for c in load_dataset(args.data)}
     backend = choreo.load_backend("sgmd", args.checkpoint)
     print("| song | dancer | foot~root | below 0.5 Hz | above | faster foot m/s | root m/s | faster foot above 0.5 Hz, "
-          "s.d. | faster foot 10th / 90th percentile |")
-    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+          "s.d. | faster foot 10th / 90th percentile | root after foot: lag, correlation | faster foot around the pelvis, "
+          "median m/s |")
+    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for name in args.songs:
         clip = clips[name]
         music = song_of(clip)

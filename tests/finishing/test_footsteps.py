@@ -5,7 +5,8 @@ import pytest
 
 from choreo.errors import ParameterError
 from choreo.finishing import finish
-from choreo.finishing.footsteps import HORIZONTAL, LEGS, FootstepsConfig, footsteps, plan_steps
+from choreo.finishing.footsteps import (DEFAULT_STRENGTH, GENRE_STRENGTH, HORIZONTAL, LEGS, FootstepsConfig, footsteps,
+                                        plan_steps)
 from choreo.metrics.stepping import stepping
 from choreo.motion import Motion
 from choreo.motion.filters import fixed_weights
@@ -90,6 +91,18 @@ def test_strength_takes_the_ankles_part_of_the_way():
         assert np.median(np.linalg.norm(after - wanted, axis=-1)) < 1e-6  # where the leg reaches
     with pytest.raises(ParameterError):
         FootstepsConfig(strength=1.5)
+
+
+def test_the_default_strength_is_the_dance_genres():
+    motion = glider()
+    assert GENRE_STRENGTH["cha-cha"] > DEFAULT_STRENGTH  # Latin feet follow the body less: more of the plan
+    for genre, strength in (("cha-cha", GENRE_STRENGTH["cha-cha"]), ("waltz", DEFAULT_STRENGTH), (None, DEFAULT_STRENGTH)):
+        dance = motion.replace(metadata={"genre": genre})
+        np.testing.assert_array_equal(footsteps(dance).rotations,
+                                      footsteps(dance, config=FootstepsConfig(strength=strength)).rotations)
+    np.testing.assert_array_equal(footsteps(motion).rotations,  # a motion no backend labelled
+                                  footsteps(motion, config=FootstepsConfig(strength=DEFAULT_STRENGTH)).rotations)
+    assert not np.array_equal(footsteps(motion.replace(metadata={"genre": "cha-cha"})).rotations, footsteps(motion).rotations)
 
 
 def test_fixed_frames_stay_exact_and_the_correction_fades_in():

@@ -9,8 +9,9 @@ itself: a foot stays where it landed until the place the dance wants it is ``tri
 away, then it swings there in ``swing_seconds`` (one foot at a time, the one left furthest
 behind first) and lands where the dance has it at the end of the swing. The legs reach the
 planned ankle positions by two-bone IK (hip and knee), each foot keeping the orientation the dance
-gave it; the root and the upper body are not touched. Frames a user fixed are left as they are,
-the correction fading in and out over ``blend_seconds`` around them.
+gave it; the root and the upper body are not touched. How far each ankle is taken toward the plan
+depends on the dance's genre: Latin dancers step where waltz dancers glide. Frames a user fixed are
+left as they are, the correction fading in and out over ``blend_seconds`` around them.
 """
 
 from __future__ import annotations
@@ -42,15 +43,29 @@ class FootstepsConfig:
     swing_seconds: float = 0.25  # how long a step takes in the air
     lift: float = 0.04  # metres the ankle rises at the middle of a step
     blend_seconds: float = 0.3  # fade of the correction next to frames a user fixed
-    # How far each ankle goes from where the dance puts it to where the plan does: all the way, feet stand
-    # far more often than real dancers' and FID_g rises; why this share: docs/results.md, "Feet".
-    strength: float = 0.65
+    strength: float | None = None  # how far each ankle goes toward the plan; None: its genre's (GENRE_STRENGTH)
 
     def __post_init__(self):
         if self.trigger <= 0 or self.swing_seconds <= 0 or self.lift < 0 or self.blend_seconds <= 0:
             raise ParameterError("footsteps: trigger, swing and blend must be positive, lift >= 0")
-        if not 0.0 <= self.strength <= 1.0:
+        if self.strength is not None and not 0.0 <= self.strength <= 1.0:
             raise ParameterError(f"footsteps: strength must be in [0, 1], got {self.strength}")
+
+
+# How far each ankle goes from where the dance puts it to where the plan does. All the way, feet stand far
+# more often than real dancers' and FID_g rises. Real Latin dancers' feet follow the body about half as
+# much as waltz dancers' (foot~root, median over the train split: cha-cha 0.21, rumba 0.33, waltz 0.53; `python
+# scripts/real_speed_limits.py`), so a Latin dance takes more of the plan. Both shares chosen on the validation
+# clips: docs/results.md, "Feet".
+GENRE_STRENGTH = {"cha-cha": 0.75, "rumba": 0.75}
+DEFAULT_STRENGTH = 0.65  # any other genre, a free-text style, a schedule of styles, no style
+
+
+def stepping_strength(motion: Motion, config: FootstepsConfig) -> float:
+    """The config's strength, or the one of the dance's genre (its metadata's ``genre``, set by a backend)."""
+    if config.strength is not None:
+        return config.strength
+    return GENRE_STRENGTH.get(motion.metadata.get("genre"), DEFAULT_STRENGTH)
 
 
 def plan_steps(wanted: np.ndarray, fps: float, config: FootstepsConfig = FootstepsConfig()) -> np.ndarray:
@@ -126,7 +141,7 @@ def footsteps(motion: Motion, fixed: "Constraints | np.ndarray | None" = None,
         return motion  # another skeleton's legs are not where SMPL-24's are
     positions = motion.joint_positions()
     wanted = positions[:, [leg[2] for leg in LEGS]]
-    weight = config.strength * fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
+    weight = stepping_strength(motion, config) * fixed_weights(fixed, motion.fps, config.blend_seconds)[:, None, None]
     targets = wanted + (plan_steps(wanted, motion.fps, config) - wanted) * weight
     rotations = motion.rotations.copy()
     for chunk in frame_chunks(motion.num_frames):  # a song's rotation matrices at once would be large
