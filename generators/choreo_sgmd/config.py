@@ -29,6 +29,7 @@ class ModelConfig:
     style_init: str = "random"
     window_frames: int = 150  # 5 s at 30 fps (counted in model frames)
     frame_stride: int = 1  # the model dances every stride-th 30 fps frame (2: 15 fps; frame_rate.py)
+    pace_condition: bool = False  # each window's pace along its ground track is a condition (docs/sgmd.md, "Pace")
 
     def __post_init__(self):
         sizes = {name: getattr(self, name) for name in ("frame_dim", "music_dim", "style_dim", "latent_dim", "ff_dim",
@@ -59,6 +60,7 @@ class DiffusionConfig:
     snr_gamma: float = 0.0  # > 0: weigh each window's loss by min(SNR(t), snr_gamma) (min-SNR); 0: uniform
     music_dropout: float = 0.25  # classifier-free guidance: music replaced by a learned null
     style_dropout: float = 0.1  # so the model can also dance with no style given
+    pace_dropout: float = 0.1  # with a pace condition: so the model can also dance at no pace given
     # Loss weights: x0 reconstruction, velocity, FK joint positions, foot contact. EDGE's, except the x0
     # term at 10 x EDGE's 0.636: the one term on every rotation, so the network reads the limbs (docs/results.md).
     reconstruction_weight: float = 6.36
@@ -81,7 +83,7 @@ class DiffusionConfig:
             raise ValueError(f"snr_gamma must be >= 0, got {self.snr_gamma}")
         if self.prediction not in PREDICTIONS:
             raise ValueError(f"prediction must be one of {PREDICTIONS}, got {self.prediction!r}")
-        for name in ("music_dropout", "style_dropout"):
+        for name in ("music_dropout", "style_dropout", "pace_dropout"):
             if not 0.0 <= getattr(self, name) < 1.0:
                 raise ValueError(f"{name} must be in [0, 1), got {getattr(self, name)}")
 

@@ -12,6 +12,7 @@ import torch
 from choreo.datasets import Clip, WindowConfig, window_starts
 from choreo.errors import ParameterError
 from choreo.motion import Motion, mirrored, motion_to_vector, stretched, turned
+from choreo.motion.travel import ground_track, track_pace
 from choreo.music import FEATURE_DIM, RHYTHM_DIM, rhythm_channels, stretch_features
 
 from .frame_rate import music_at_model_rate
@@ -25,6 +26,7 @@ class WindowTensors:
     style: torch.Tensor  # (N, S) style vectors (zeros where the genre is unknown)
     has_style: torch.Tensor  # (N,) bool
     genres: tuple[str | None, ...] = ()  # (N,) each window's genre, for genre-balanced sampling
+    pace: torch.Tensor | None = None  # (N,) each window's pace along its ground track, m/s (a pace condition)
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -79,8 +81,9 @@ def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind:
                        frame_stride: int = 1) -> WindowTensors:
     """Every window of ``clips`` (and of their augmented copies) as stacked tensors; motion
     vectors are computed once per clip and copy; rhythm channels per window, as scoring sees them.
-    ``frame_stride``: windows at the model's frame rate (every stride-th frame; frame_rate.py)."""
-    motions, musics, styles, has_style, genres = [], [], [], [], []
+    ``frame_stride``: windows at the model's frame rate (every stride-th frame; frame_rate.py).
+    Each window's pace is measured on the whole clip's ground track, so its ends are not filter edges."""
+    motions, musics, styles, has_style, genres, paces = [], [], [], [], [], []
     dim = len(GENRES) if prompt_kind == "onehot" else 384
     for clip in clips:
         if clip.features is None:
@@ -89,6 +92,7 @@ def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind:
         vector = genre_vector(genre, prompt_kind) if genre else np.zeros(dim, np.float32)
         for motion, features in augmentation.variants(clip.motion, clip.features):
             vectors = motion_to_vector(motion)
+            track = ground_track(motion.root_positions, motion.fps)
             for start in window_starts(len(vectors), config):
                 stop = start + config.length
                 motions.append(vectors[start:stop:frame_stride])
@@ -96,10 +100,12 @@ def windows_to_tensors(clips: Sequence[Clip], config: WindowConfig, prompt_kind:
                 styles.append(vector)
                 has_style.append(genre is not None)
                 genres.append(genre)
+                paces.append(track_pace(track[start:stop], motion.fps))
     if not motions:
         raise ValueError("no training windows: clips are shorter than a window or have no music")
     return WindowTensors(torch.from_numpy(np.stack(motions)).float(), torch.from_numpy(np.stack(musics)).float(),
-                         torch.from_numpy(np.stack(styles)).float(), torch.tensor(has_style), tuple(genres))
+                         torch.from_numpy(np.stack(styles)).float(), torch.tensor(has_style), tuple(genres),
+                         torch.tensor(paces, dtype=torch.float32))
 
 
 @dataclass

@@ -10,6 +10,7 @@ import numpy as np
 import torch
 
 from choreo.constraints import Constraints, parse_style_schedule
+from choreo.finishing.pace import target_pace
 from choreo.errors import InputError, ParameterError
 from choreo.generator.options import parse_options
 from choreo.generator import GenerationRequest, Generator
@@ -107,10 +108,23 @@ class SGMDGenerator(Generator):
                                  "(Music.from_file(path), not timbre=False)")
         return options
 
+    def with_pace(self, options: SamplingOptions, genres: list) -> SamplingOptions:
+        """The options with the pace a pace-conditioned network is asked for: the one given, else the
+        real pace of the dance's one genre (of all genres for a free-text style or none; a schedule of
+        styles gets none)."""
+        if not self.model_config.pace_condition:
+            if options.pace is not None:
+                raise ParameterError(f"sgmd: {self.checkpoint.name} was not trained with a pace condition")
+            return options
+        if options.pace is not None or len(genres) > 1:
+            return options
+        return replace(options, pace=target_pace(genres[0] if genres else None))
+
     def generate(self, request: GenerationRequest, progress: Callable[[float], None] | None = None) -> Motion:
         options = self.sampling_options(request)
         num_frames = request.music.num_frames
         style, keep_style, genres, notices = self.style_conditioning(request.style, num_frames, request.music.fps)
+        options = self.with_pace(options, genres)
         inpainting, known = self.inpainting(request.constraints, num_frames)
         music = self.music_tensor(request.music.features)
         x0, evaluations = sample_long(self.model, self.schedule, music, style, keep_style, self.model_config.frame_dim,
@@ -127,6 +141,7 @@ class SGMDGenerator(Generator):
             "genre": genres[0] if len(genres) == 1 else (",".join(g or "free text" for g in genres) or None),
             "style_notice": "; ".join(notices) or None, "seed": options.seed, "steps": options.steps,
             "guidance": options.guidance, "style_guidance": options.style_guidance, "sampler": options.sampler,
+            **({"pace_asked": options.pace} if self.model_config.pace_condition else {}),
             "network_evaluations": evaluations,
             "trained_steps": self.trained_steps,
             "constrained_fraction": None if request.constraints is None else round(request.constraints.known_fraction(), 4),

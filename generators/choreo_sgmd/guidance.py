@@ -30,10 +30,12 @@ class GuidedDenoiser:
     def __init__(self, model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor, guidance: float,
                  chunk_windows: int = 32, cache_windows: int = CACHE_WINDOWS,
                  interval: tuple[int, int] | None = None, style_guidance: float = 1.0,
-                 style_interval: tuple[int, int] | None = None):
+                 style_interval: tuple[int, int] | None = None, pace: float | None = None):
         """``interval`` / ``style_interval`` (first, last): the diffusion steps t, inclusive, at which
-        music / style guidance applies (None: all)."""
+        music / style guidance applies (None: all). ``pace``: m/s every window is asked to travel at,
+        in every block alike (a condition, not a guided term), for a network with a pace condition."""
         self.model, self.music, self.styles, self.keep_style, self.guidance = model, music, styles, keep_style, guidance
+        self.pace = float("nan") if pace is None else float(pace)
         self.interval, self.style_guidance, self.style_interval = interval, style_guidance, style_interval
         styled = guides_style(style_guidance, keep_style)
         self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if styled else [])
@@ -61,7 +63,8 @@ class GuidedDenoiser:
         keep_music = {"conditional": True, "no music": False, "no style": True}
         return self.model.condition(torch.cat([music] * len(self.blocks)), torch.cat([styles] * len(self.blocks)),
                                     torch.cat([torch.full((count,), keep_music[b]) for b in self.blocks]),
-                                    torch.cat([keep_style & (b != "no style") for b in self.blocks]))
+                                    torch.cat([keep_style & (b != "no style") for b in self.blocks]),
+                                    torch.full((count * len(self.blocks),), self.pace))
 
     @torch.no_grad()
     def __call__(self, x_t: torch.Tensor, t: int) -> torch.Tensor:

@@ -2,7 +2,7 @@
 
 Shape of the network (EDGE's, plus the paper's Style Modulation):
 - music encoder: linear projection of the 35-d features, then self-attention layers;
-- conditioning vector c = MLP(sinusoidal(t)) + MLP(mean over music tokens), applied by FiLM;
+- conditioning vector c = MLP(sinusoidal(t)) + MLP(mean over music tokens) [+ MLP(pace)], applied by FiLM;
 - decoder layers (pre-norm): self-attention over motion frames, cross-attention to the music,
   Style Modulation (paper eq. 5: x + RMSNorm(x) * FC(s), one FC shared by every layer),
   feed-forward; each residual branch modulated by FiLM, (1 + scale) * h + shift;
@@ -186,6 +186,13 @@ class Denoiser(nn.Module):
             # and the network starts as that model: the style only enters where training finds it helps.
             nn.init.zeros_(self.style_project.weight)
             nn.init.zeros_(self.style_project.bias)
+        self.pace_mlp = self.null_pace = None
+        if config.pace_condition:
+            # Created last, its output layer zeroed: a network fine-tuned into taking a pace starts as it was.
+            self.pace_mlp = nn.Sequential(nn.Linear(1, d), nn.SiLU(), nn.Linear(d, d))
+            nn.init.zeros_(self.pace_mlp[-1].weight)
+            nn.init.zeros_(self.pace_mlp[-1].bias)
+            self.null_pace = nn.Parameter(torch.zeros(1, d))  # stands in for "no pace given"
 
     def encode_music(self, music: torch.Tensor, keep_music: torch.Tensor) -> torch.Tensor:
         """(B, T, d) music tokens; rows where keep_music is False become the learned null."""
@@ -195,14 +202,23 @@ class Denoiser(nn.Module):
             tokens = layer(tokens)
         return tokens
 
+    def pace_embedding(self, pace: torch.Tensor | None, batch: int, device) -> torch.Tensor:
+        """(B, d) for paces (B,) in m/s along the ground track; NaN (or no tensor) where none is given."""
+        pace = torch.full((batch,), float("nan"), device=device) if pace is None else pace.to(device).float()
+        embedded = self.pace_mlp(torch.nan_to_num(pace)[:, None])
+        return torch.where(torch.isnan(pace)[:, None], self.null_pace.expand_as(embedded), embedded)
+
     def condition(self, music: torch.Tensor, style: torch.Tensor, keep_music: torch.Tensor | None = None,
-                  keep_style: torch.Tensor | None = None) -> "Conditioning":
-        """Everything that depends on music and style only: computed once per song when sampling."""
+                  keep_style: torch.Tensor | None = None, pace: torch.Tensor | None = None) -> "Conditioning":
+        """Everything that depends on music, style and pace only: computed once per song when sampling.
+        ``pace`` (B,) m/s, NaN where none is given; read only by a network with a pace condition."""
         batch = music.shape[0]
         keep_music = torch.ones(batch, dtype=torch.bool, device=music.device) if keep_music is None else keep_music
         keep_style = torch.ones(batch, dtype=torch.bool, device=music.device) if keep_style is None else keep_style
         memory = self.encode_music(music, keep_music)
         pooled = self.music_pool_mlp(memory.mean(1))
+        if self.pace_mlp is not None:
+            pooled = pooled + self.pace_embedding(pace, batch, music.device)
         style = torch.where(keep_style[:, None], style, self.null_style.expand_as(style))
         style_scale = None
         if self.config.style_mode == "modulation":
@@ -226,15 +242,16 @@ class Denoiser(nn.Module):
         return skip * x_t / alpha_bar.sqrt() - (variance * data / (variance + data)).sqrt() * output
 
     def forward(self, x_t: torch.Tensor, t: torch.Tensor, music: torch.Tensor, style: torch.Tensor,
-                keep_music: torch.Tensor | None = None, keep_style: torch.Tensor | None = None) -> torch.Tensor:
-        return self.denoise(x_t, t, self.condition(music, style, keep_music, keep_style))
+                keep_music: torch.Tensor | None = None, keep_style: torch.Tensor | None = None,
+                pace: torch.Tensor | None = None) -> torch.Tensor:
+        return self.denoise(x_t, t, self.condition(music, style, keep_music, keep_style, pace))
 
 
 @dataclass
 class Conditioning:
     """The music and style side of the network for a batch of windows."""
 
-    pooled_music: torch.Tensor  # (B, d), added to the step embedding
+    pooled_music: torch.Tensor  # (B, d), added to the step embedding (the pace's embedding included)
     style_scale: torch.Tensor | None  # (B, d), Style Modulation's FC(s)
     keys_values: list[tuple[torch.Tensor, torch.Tensor]]  # per decoder layer: cross-attention keys and values
 

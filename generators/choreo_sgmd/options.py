@@ -48,6 +48,9 @@ class SamplingOptions:
         default_text=f"{FREE_STYLE_GUIDANCE:g}, or {CONSTRAINED_STYLE_GUIDANCE:g} where frames are given")
     style_guidance_interval: tuple[float, float] = (0.0, 1.0)  # noise levels t/T where style guidance applies
     resample: int = 1  # with constraints: run each step this many times, re-noising in between (RePaint)
+    # m/s along the ground track, for a checkpoint trained with a pace condition (docs/sgmd.md, "Pace");
+    # None: the genre's real pace (choreo.finishing.pace), or none for a free-text style
+    pace: float | None = None
     bundled_timesteps: ClassVar[int] = BUNDLED_TIMESTEPS  # the CLI checks steps on it before the checkpoint loads
 
     def __post_init__(self):
@@ -64,6 +67,8 @@ class SamplingOptions:
             object.__setattr__(self, "guidance_interval", _checked_interval("guidance_interval", self.guidance_interval))
         object.__setattr__(self, "style_guidance_interval",
                            _checked_interval("style_guidance_interval", self.style_guidance_interval))
+        if self.pace is not None and not 0.0 <= self.pace <= 3.0:  # NaN too; real dancers' fastest genre: 1.2
+            raise ValueError(f"pace must be 0 to 3 m/s, got {self.pace:g}")
         if min(self.chunk_windows, self.block_windows, self.resample) < 1:
             raise ValueError("chunk_windows, block_windows and resample must be >= 1")
 
@@ -130,6 +135,8 @@ class TrainOptions:
                                                    "e.g. 0,90,180,270.")
     genre_balance: float | None = option(None, "0 draws windows uniformly, 1 draws every genre equally.")
     rhythm: bool | None = option(None, "Feed beat phase and tempo to the model.", "--rhythm/--no-rhythm")
+    pace_condition: bool | None = option(None, "Give the network each window's pace as a condition (with --init-from: "
+                                               "a network without one gains it).", "--pace-condition/--no-pace-condition")
     prediction: str | None = option(None, "What the network predicts: x0 or v.")
     sigma_data: float | None = option(None, "With --prediction v: the data's standard deviation the skip assumes.")
     snr_gamma: float | None = option(None, "Weigh each window's loss by min(SNR, this) (min-SNR; 0: off).")

@@ -225,7 +225,7 @@ def guided_denoiser(model, music: torch.Tensor, styles: torch.Tensor, keep_style
     return GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
                           interval=options.guided_steps(schedule.timesteps, guides_style(options.style_guidance, keep_style)),
                           style_guidance=options.style_guidance,
-                          style_interval=options.style_guided_steps(schedule.timesteps))
+                          style_interval=options.style_guided_steps(schedule.timesteps), pace=options.pace)
 
 
 @torch.no_grad()

@@ -82,15 +82,24 @@ class Trainer:
         keep_music = torch.rand(len(indices), generator=generator) >= self.diffusion_config.music_dropout
         keep_style = (torch.rand(len(indices), generator=generator) >= self.diffusion_config.style_dropout)
         keep_style &= data.has_style[indices]
+        pace = self.paces(generator, data, indices)
         indices = indices[share]
-        on_device = [x[share].to(self.device) for x in (t, noise, keep_music, keep_style)]
+        on_device = [x[share].to(self.device) for x in (t, noise, keep_music, keep_style, pace)]
         x0 = self.normalizer.normalize(data.motion[indices].to(self.device))
         music = self.music_scaler(data.music[indices].to(self.device))
-        return x0, music, on_device[0], on_device[1], on_device[2], on_device[3], data.style[indices].to(self.device)
+        return x0, music, *on_device[:4], data.style[indices].to(self.device), on_device[4]
 
-    def loss(self, model, x0, music, t, noise, keep_music, keep_style, style) -> torch.Tensor:
+    def paces(self, generator: torch.Generator, data: WindowTensors, indices: torch.Tensor) -> torch.Tensor:
+        """The windows' paces, NaN (none given) for the dropped share; all NaN for a network without
+        a pace condition, or windows without paces. Drawn either way, so the other draws stay the same."""
+        keep = torch.rand(len(indices), generator=generator) >= self.diffusion_config.pace_dropout
+        if not self.model_config.pace_condition or data.pace is None:
+            return torch.full((len(indices),), float("nan"))
+        return torch.where(keep, data.pace[indices], torch.tensor(float("nan")))
+
+    def loss(self, model, x0, music, t, noise, keep_music, keep_style, style, pace=None) -> torch.Tensor:
         x_t = self.schedule.q_sample(x0, t, noise)
-        predicted = model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style)
+        predicted = model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style, pace=pace)
         gamma = self.diffusion_config.snr_gamma
         weights = snr_weights(self.schedule.alpha_bar(t).to(x0.dtype), gamma) if gamma else None
         terms = diffusion_losses(predicted, x0, self.normalizer, weights, self.diffusion_config.contact_source,
@@ -131,10 +140,11 @@ class Trainer:
         generator = torch.Generator().manual_seed(12345)
         count = min(VALIDATION_WINDOWS, len(self.validation))
         indices = torch.randperm(len(self.validation), generator=generator)[:count]
-        x0, music, t, noise, _, _, style = self.batch(generator, self.validation, indices)
+        x0, music, t, noise, _, _, style, _ = self.batch(generator, self.validation, indices)
         keep = torch.ones(count, dtype=torch.bool, device=self.device)
+        pace = self.validation.pace[indices].to(self.device) if self.validation.pace is not None else None
         return float(self.loss(self.ema, x0, music, t, noise, keep, keep & self.validation.has_style[indices].to(self.device),
-                               style))
+                               style, pace))
 
     def state(self) -> dict:
         return {
@@ -178,12 +188,17 @@ class Trainer:
 
     def start_from(self, state: dict, name: str) -> None:
         """Fine-tune: another run's weights, optimiser and step, under this run's losses and data
-        settings (the network must be the same)."""
+        settings. The network must be the same, or that network given a pace condition: then its
+        weights are loaded into the new one, whose pace branch starts silent, and the optimiser starts afresh."""
         stored = asdict(ModelConfig(**state["model_config"]))
+        adds_pace = self.model_config.pace_condition and not stored["pace_condition"]
         changed = [f"{key} {value!r} -> {getattr(self.model_config, key)!r}" for key, value in stored.items()
-                   if getattr(self.model_config, key) != value]
+                   if getattr(self.model_config, key) != value and not (adds_pace and key == "pace_condition")]
         if changed:
             raise SettingsDiffer(f"cannot start from {name}: its network differs ({'; '.join(changed)})")
+        if adds_pace:
+            state = {**state, "optimizer": self.optimizer.state_dict(),
+                     **{key: {**self.model.state_dict(), **state[key]} for key in ("state_dict", "ema_state_dict")}}
         self.load_state(state)
         self.started_from = {"checkpoint": name, "step": int(state["step"])}
 
