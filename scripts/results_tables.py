@@ -110,6 +110,10 @@ VALIDATION_LATIN = [("SGMD, 0.65 (the default until now)", "validation-latin-foo
                     ("ChoreoGraph, 0.65", "validation-graph-latin-footsteps-0.65"),
                     ("ChoreoGraph, 0.75", "validation-graph-latin-footsteps-0.75"),
                     ("ChoreoGraph, 0.85", "validation-graph-latin-footsteps-0.85")]
+VALIDATION_SAMPLER_PACE = [("none (the defaults)", "validation-step12000-latin-0.75"),
+                           ("within 1.5 x, every step", "validation-sampler-pace-1.5"),
+                           ("within 1.25 x, every step", "validation-sampler-pace-1.25"),
+                           ("within 1.5 x, noise levels up to 0.5", "validation-sampler-pace-1.5-below-0.5")]
 
 
 @cache
@@ -194,6 +198,11 @@ def whole_songs_validation_latin() -> str:
     return validation_table("footsteps strength, cha-cha and rumba", VALIDATION_LATIN)
 
 
+def whole_songs_validation_sampler_pace() -> str:
+    """docs/results.md, "What the feet and the beats still miss": the sampler pulling the travel toward the pace."""
+    return validation_table("the sampler's pull toward the genre's pace", VALIDATION_SAMPLER_PACE)
+
+
 def validation_table(title: str, runs: list[tuple[str, str]]) -> str:
     """Runs on the validation clips, real dancers first: means over songs, FIDs, targets missed."""
     header = [title, "pace m/s", "reach m", "planted", "foot~root", "jerk", "root jerk", "body jerk",
@@ -272,7 +281,8 @@ TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": wh
           "whole-songs-validation-accent": whole_songs_validation_accent,
           "whole-songs-validation-feet": whole_songs_validation_feet,
           "whole-songs-validation-graph": whole_songs_validation_graph,
-          "whole-songs-validation-latin": whole_songs_validation_latin, "readme-results": readme_results}
+          "whole-songs-validation-latin": whole_songs_validation_latin,
+          "whole-songs-validation-sampler-pace": whole_songs_validation_sampler_pace, "readme-results": readme_results}
 
 
 def regenerated(text: str) -> str:
