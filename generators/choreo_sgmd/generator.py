@@ -180,7 +180,10 @@ class SGMDGenerator(Generator):
         if known is not None:  # exact, as in generate
             values, mask = known
             vectors[mask] = values[mask]
-        return [vector_to_motion(v, fps=r.music.fps)[0] for v, r in zip(vectors, requests)]
+        motions = [vector_to_motion(v, fps=r.music.fps)[0] for v, r in zip(vectors, requests)]
+        for motion, (_, style) in zip(motions, resolved):
+            motion.metadata = {"generator": "sgmd", "genre": style.genre}  # what finishing reads, as for a whole song
+        return motions
 
     def style_vector(self, prompt: str | None) -> tuple[torch.Tensor, Style]:
         """The (S,) vector the model reads for one prompt (zeros where no style is given) and what it

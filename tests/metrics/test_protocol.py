@@ -133,6 +133,8 @@ def test_sgmd_batch_dances_each_window_on_its_own(tiny_generator, clips):
     assert not np.allclose(changed[1].rotations, first[1].rotations)
     reseeded = tiny_generator.generate_windows(requests_for(windows, seed=1))
     assert not np.allclose(reseeded[0].rotations, first[0].rotations)
+    single = tiny_generator.generate(requests_for(windows[:1])[0])
+    assert all(m.metadata["genre"] == single.metadata["genre"] for m in first)  # the finishing reads it, as for a song
 
 
 def test_sgmd_batch_keeps_each_windows_constraints_exactly(tiny_generator, clips):
