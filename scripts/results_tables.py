@@ -22,7 +22,7 @@ import argparse
 import json
 import re
 import sys
-from functools import cache
+from functools import cache, partial
 from pathlib import Path
 
 import numpy as np
@@ -168,41 +168,6 @@ def whole_songs_summary() -> str:
     return table(header, ["---"] + ["---:"] * 8 + ["---"] * 2 + ["---:"], rows)
 
 
-def whole_songs_validation() -> str:
-    """docs/results.md, "Chosen on the validation clips": music guidance with the held-out model."""
-    return validation_table("music guidance", VALIDATION)
-
-
-def whole_songs_validation_finishing() -> str:
-    """docs/results.md, "Chosen on the validation clips": the finishing passes' settings."""
-    return validation_table("finishing (root path cut-off, footsteps strength, pace bound)", VALIDATION_FINISHING)
-
-
-def whole_songs_validation_accent() -> str:
-    """docs/results.md, "Chosen on the validation clips": the accent's depth."""
-    return validation_table("accent depth", VALIDATION_ACCENT)
-
-
-def whole_songs_validation_feet() -> str:
-    """docs/results.md, "What the feet and the beats still miss": the planner with glide and quick moves apart."""
-    return validation_table("where the ankles go", VALIDATION_FEET)
-
-
-def whole_songs_validation_graph() -> str:
-    """docs/results.md, "Chosen on the validation clips": the graph's floor, then the accent."""
-    return validation_table("ChoreoGraph", VALIDATION_GRAPH)
-
-
-def whole_songs_validation_latin() -> str:
-    """docs/results.md, "Feet": the footsteps' strength on the Latin validation songs."""
-    return validation_table("footsteps strength, cha-cha and rumba", VALIDATION_LATIN)
-
-
-def whole_songs_validation_sampler_pace() -> str:
-    """docs/results.md, "What the feet and the beats still miss": the sampler pulling the travel toward the pace."""
-    return validation_table("the sampler's pull toward the genre's pace", VALIDATION_SAMPLER_PACE)
-
-
 def validation_table(title: str, runs: list[tuple[str, str]]) -> str:
     """Runs on the validation clips, real dancers first: means over songs, FIDs, targets missed."""
     header = [title, "pace m/s", "reach m", "planted", "foot~root", "jerk", "root jerk", "body jerk",
@@ -274,15 +239,22 @@ def whole_songs_guidance() -> str:
     return table(header, ["---:"] * 3 + ["---"] * 2 + ["---:"], rows)
 
 
+# Tables of runs on the validation clips (validation_table): name -> (first column's title, runs). Where each
+# stands in docs/results.md: "Chosen on the validation clips" (music guidance, finishing, accent depth, ChoreoGraph,
+# the Latin footsteps) and "What the feet and the beats still miss" (the ankles, the sampler's pull).
+VALIDATION_TABLES = {
+    "whole-songs-validation": ("music guidance", VALIDATION),
+    "whole-songs-validation-finishing": ("finishing (root path cut-off, footsteps strength, pace bound)", VALIDATION_FINISHING),
+    "whole-songs-validation-accent": ("accent depth", VALIDATION_ACCENT),
+    "whole-songs-validation-feet": ("where the ankles go", VALIDATION_FEET),
+    "whole-songs-validation-graph": ("ChoreoGraph", VALIDATION_GRAPH),
+    "whole-songs-validation-latin": ("footsteps strength, cha-cha and rumba", VALIDATION_LATIN),
+    "whole-songs-validation-sampler-pace": ("the sampler's pull toward the genre's pace", VALIDATION_SAMPLER_PACE),
+}
 TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": whole_songs_per_song,
           "whole-songs-outside": whole_songs_outside, "whole-songs-guidance": whole_songs_guidance,
-          "whole-songs-validation": whole_songs_validation,
-          "whole-songs-validation-finishing": whole_songs_validation_finishing,
-          "whole-songs-validation-accent": whole_songs_validation_accent,
-          "whole-songs-validation-feet": whole_songs_validation_feet,
-          "whole-songs-validation-graph": whole_songs_validation_graph,
-          "whole-songs-validation-latin": whole_songs_validation_latin,
-          "whole-songs-validation-sampler-pace": whole_songs_validation_sampler_pace, "readme-results": readme_results}
+          "readme-results": readme_results,
+          **{name: partial(validation_table, *table) for name, table in VALIDATION_TABLES.items()}}
 
 
 def regenerated(text: str) -> str:
