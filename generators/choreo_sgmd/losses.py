@@ -31,11 +31,13 @@ class LossTerms:
     foot: torch.Tensor
     stepping: torch.Tensor  # the feet's world speeds against the data's, in (m/s)^2
     root_speed: torch.Tensor  # the root's horizontal speed against the data's, in (m/s)^2
+    pace: torch.Tensor  # each window's pace against the data's, in (m/s)^2
 
     def total(self, config: DiffusionConfig) -> torch.Tensor:
         total = (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
                  + config.joint_weight * self.joints + config.foot_weight * self.foot)
-        for weight, term in ((config.stepping_weight, self.stepping), (config.root_speed_weight, self.root_speed)):
+        for weight, term in ((config.stepping_weight, self.stepping), (config.root_speed_weight, self.root_speed),
+                             (config.pace_weight, self.pace)):
             if weight:  # the terms most runs leave off
                 total = total + weight * term
         return total
@@ -80,8 +82,10 @@ def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: 
     foot = _per_window(feet_velocity.pow(2).sum(-1) * in_contact)  # no gradient through the contact mask
     stepping = _per_window((feet_velocity - foot_velocity(target_joints)).mul(FPS).pow(2).sum(-1))
     root_speed = _per_window((horizontal_root_speed(predicted_motion) - horizontal_root_speed(target_motion)).pow(2))
+    pace = (window_pace(predicted_motion) - window_pace(target_motion)).pow(2)
     weigh = (lambda term: term.mean()) if weights is None else (lambda term: (term * weights).mean())  # noqa: E731
-    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping), weigh(root_speed))
+    return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping), weigh(root_speed),
+                     weigh(pace))
 
 
 def horizontal_root_speed(vectors: torch.Tensor) -> torch.Tensor:
@@ -93,6 +97,17 @@ def horizontal_root_speed(vectors: torch.Tensor) -> torch.Tensor:
     root = vectors[..., ROOT_SLICE]
     step = (root[:, 1:] - root[:, :-1])[..., [0, 2]] * FPS
     return torch.sqrt(step.pow(2).sum(-1) + 1e-8)
+
+
+def window_pace(vectors: torch.Tensor) -> torch.Tensor:
+    """(B, T, 151) de-normalised frame vectors -> (B,) each window's pace in m/s: the root's floor path
+    averaged over a second (no sway or wobble, as ``choreo.motion.travel``'s 1 Hz ground track), its
+    length over its duration. What a pace condition names: a term on it rewards a network for
+    travelling the pace it is told, where a frame-by-frame speed term rewarded smoothing the root."""
+    floor = vectors[..., ROOT_SLICE][..., [0, 2]].transpose(1, 2)  # (B, 2, T)
+    track = F.avg_pool1d(floor, min(int(FPS), max(1, floor.shape[-1] // 2)), stride=1)  # a short window keeps a path
+    step = track[..., 1:] - track[..., :-1]
+    return torch.sqrt(step.pow(2).sum(1) + 1e-8).mean(-1) * FPS
 
 
 def foot_velocity(joints: torch.Tensor) -> torch.Tensor:

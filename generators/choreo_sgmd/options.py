@@ -148,6 +148,8 @@ class TrainOptions:
     leg_weight: float | None = option(None, "Weight of the legs' rotation channels inside the x0 term.")
     root_speed_weight: float | None = option(None, "Weight of the root's horizontal speed against the data's, "
                                                    "direction-free, in (m/s)^2.")
+    pace_weight: float | None = option(None, "Weight of each window's pace (its root's floor path over a second) "
+                                             "against the data's, in (m/s)^2.")
     init_from: str | None = option(None, "Fine-tune from this training state (same network; its step count carries on).",
                                    existing_file=True)
     hold_out_validation: bool = option(False, "On M2D: train without the validation clips (docs/m2d.md) and "

@@ -62,6 +62,26 @@ def test_root_speed_term_compares_pace_whatever_the_direction():
         DiffusionConfig(root_speed_weight=-1.0)
 
 
+def test_pace_term_compares_travel_along_the_smoothed_path_not_its_wobble():
+    predicted, target, normalizer = skating_and_standing()  # 1 s: the prediction glides 1 m/s, the target stands
+    assert float(diffusion_losses(predicted, target, normalizer).pace) == pytest.approx(1.0, rel=1e-2)
+    motion = normalizer.denormalize(target).repeat(1, 4, 1)  # 4 s standing still
+    wobbling = motion.clone()
+    wobbling[..., ROOT_SLICE.start] += 0.05 * torch.sin(torch.arange(120) * 2 * np.pi * 3 / 30)  # 3 Hz, 5 cm
+    travelling = motion.clone()
+    travelling[..., ROOT_SLICE.start + 2] += torch.arange(120) / 30 * 0.5  # 0.5 m/s along z
+    terms = {name: diffusion_losses(normalizer.normalize(m), normalizer.normalize(motion), normalizer)
+             for name, m in (("wobbling", wobbling), ("travelling", travelling))}
+    assert float(terms["wobbling"].root_speed) > 0.3  # the frame-by-frame speed counts the wobble as travel
+    assert float(terms["wobbling"].pace) < 0.01 * float(terms["wobbling"].root_speed)  # the pace does not
+    assert float(terms["travelling"].pace) == pytest.approx(0.25, rel=2e-2)  # (0.5 m/s)^2
+    skating = diffusion_losses(predicted, target, normalizer)
+    added = skating.total(DiffusionConfig(pace_weight=2.0)) - skating.total(DiffusionConfig())
+    assert float(added) == pytest.approx(2.0 * float(skating.pace), rel=1e-5)
+    with pytest.raises(ValueError, match="pace_weight"):
+        DiffusionConfig(pace_weight=-1.0)
+
+
 def test_leg_weight_scales_only_the_legs_rotation_channels():
     legs = leg_channels(151)
     assert int(legs.sum()) == 6 * (len(LOWER_BODY_JOINTS) - 1)
