@@ -40,7 +40,8 @@ SUMMARY = [
     ("SGMD before", "sgmd-before-2026-12-05", ()),
     ("SGMD, guidance 2, root path, pace (this morning)", "sgmd-no-accent", ()),
     ("SGMD + accent (the fourth session)", "sgmd-latin-footsteps-0.65", ()),
-    ("**SGMD now** (+ Latin footsteps 0.75)", "sgmd", ("foot_root",)),
+    ("SGMD + Latin footsteps 0.75 (the fifth session)", "sgmd-latin-footsteps-0.75", ()),
+    ("**SGMD now** (+ travel unguided in waltz)", "sgmd", ("jerk", "root_jerk")),
     ("ChoreoGraph before", "graph-before-2026-12-05", ()),
     ("ChoreoGraph, root path, pace (this morning)", "graph-no-floor-no-accent", ()),
     ("ChoreoGraph + floor, accent (the fourth session)", "graph-latin-footsteps-0.65", ()),
@@ -54,7 +55,7 @@ SUMMARY = [
 ]
 README = [
     ("**SGMD, bundled model, as `choreo generate` writes it** (DDIM 10, guidance 2 on the music and 2 on "
-     "the style; speed limit, root path, pace, accent, footsteps, beat lock)", "sgmd"),
+     "the style, the travel unguided in waltz; speed limit, root path, pace, accent, footsteps, beat lock)", "sgmd"),
     ("**ChoreoGraph, bundled models and repertoire, as `choreo graph` writes it** (K = 512, each seed a "
      "take, a 3 m floor; the same passes)", "graph"),
     ("SGMD with the defaults until 2026-12-04 (guidance 2.5, no root path, pace or accent pass)", "sgmd-before-2026-12-05"),
@@ -114,6 +115,17 @@ VALIDATION_SAMPLER_PACE = [("none (the defaults)", "validation-step12000-latin-0
                            ("within 1.5 x, every step", "validation-sampler-pace-1.5"),
                            ("within 1.25 x, every step", "validation-sampler-pace-1.25"),
                            ("within 1.5 x, noise levels up to 0.5", "validation-sampler-pace-1.5-below-0.5")]
+VALIDATION_TRAVEL = [("1, every genre (the default until now)", "validation-travel-guided"),
+                     ("0.5, every genre", "validation-travel-0.5"), ("0, every genre", "validation-travel-0"),
+                     ("0 in waltz, 1 in cha-cha and rumba (the default now)", "validation-travel-0-waltz"),
+                     ("1, seeds 3-5", "validation-travel-guided-seeds-3-5"),
+                     ("0.5, seeds 3-5", "validation-travel-0.5-seeds-3-5"), ("0, seeds 3-5", "validation-travel-0-seeds-3-5"),
+                     ("0 in waltz, seeds 3-5", "validation-travel-0-waltz-seeds-3-5")]
+VALIDATION_PACE_CONDITION = [("the held-out model (travel guided in every genre)", "validation-travel-guided"),
+                             ("the same recipe with the pace condition, asked the genre's pace (travel guided)",
+                              "validation-pace-condition"),
+                             ("the held-out model, seeds 3-5", "validation-travel-guided-seeds-3-5"),
+                             ("with the pace condition, seeds 3-5", "validation-pace-condition-seeds-3-5")]
 
 
 @cache
@@ -250,6 +262,8 @@ VALIDATION_TABLES = {
     "whole-songs-validation-graph": ("ChoreoGraph", VALIDATION_GRAPH),
     "whole-songs-validation-latin": ("footsteps strength, cha-cha and rumba", VALIDATION_LATIN),
     "whole-songs-validation-sampler-pace": ("the sampler's pull toward the genre's pace", VALIDATION_SAMPLER_PACE),
+    "whole-songs-validation-travel": ("guidance on the travel (share)", VALIDATION_TRAVEL),
+    "whole-songs-validation-pace-condition": ("SGMD, 12,000 steps without the validation clips", VALIDATION_PACE_CONDITION),
 }
 TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": whole_songs_per_song,
           "whole-songs-outside": whole_songs_outside, "whole-songs-guidance": whole_songs_guidance,

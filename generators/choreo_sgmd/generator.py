@@ -23,7 +23,7 @@ from .data import MusicScaler, music_input
 from .frame_rate import frames_at_full_rate, known_at_model_rate, music_at_model_rate
 from .model import Denoiser
 from .normalizer import Normalizer
-from .options import SamplingOptions
+from .options import GENRE_TRAVEL_GUIDANCE, SamplingOptions
 from .sampling import Inpainting, sample_independent, sample_long
 from .schedule import NoiseSchedule
 from .style import GENRES, Style, resolve_style
@@ -108,10 +108,15 @@ class SGMDGenerator(Generator):
                                  "(Music.from_file(path), not timbre=False)")
         return options
 
-    def with_pace(self, options: SamplingOptions, genres: list) -> SamplingOptions:
-        """The options with the pace a pace-conditioned network is asked for: the one given, else the
-        real pace of the dance's one genre (of all genres for a free-text style or none; a schedule of
+    def for_genres(self, options: SamplingOptions, genres: list) -> SamplingOptions:
+        """The options with what the dance's genres decide, where not given: the share of guidance its
+        travel gets (its one genre's, else 1) and, for a pace-conditioned network, the pace it is asked
+        for (the real pace of its one genre, of all genres for a free-text style or none; a schedule of
         styles gets none)."""
+        genres = list(dict.fromkeys(genres))
+        if options.travel_guidance is None:
+            share = GENRE_TRAVEL_GUIDANCE.get(genres[0], 1.0) if len(genres) == 1 else 1.0
+            options = replace(options, travel_guidance=share)
         if not self.model_config.pace_condition:
             if options.pace is not None:
                 raise ParameterError(f"sgmd: {self.checkpoint.name} was not trained with a pace condition")
@@ -124,7 +129,7 @@ class SGMDGenerator(Generator):
         options = self.sampling_options(request)
         num_frames = request.music.num_frames
         style, keep_style, genres, notices = self.style_conditioning(request.style, num_frames, request.music.fps)
-        options = self.with_pace(options, genres)
+        options = self.for_genres(options, genres)
         inpainting, known = self.inpainting(request.constraints, num_frames)
         music = self.music_tensor(request.music.features)
         x0, evaluations = sample_long(self.model, self.schedule, music, style, keep_style, self.model_config.frame_dim,
@@ -140,7 +145,8 @@ class SGMDGenerator(Generator):
             "generator": "sgmd", "checkpoint": self.checkpoint.name, "style": request.style,
             "genre": genres[0] if len(genres) == 1 else (",".join(g or "free text" for g in genres) or None),
             "style_notice": "; ".join(notices) or None, "seed": options.seed, "steps": options.steps,
-            "guidance": options.guidance, "style_guidance": options.style_guidance, "sampler": options.sampler,
+            "guidance": options.guidance, "style_guidance": options.style_guidance, "travel_guidance": options.travel_guidance,
+            "sampler": options.sampler,
             **({"pace_asked": options.pace} if self.model_config.pace_condition else {}),
             "network_evaluations": evaluations,
             "trained_steps": self.trained_steps,
@@ -165,6 +171,7 @@ class SGMDGenerator(Generator):
         num_frames = first.music.num_frames
         music = self.music_tensor(np.stack([r.music.features for r in requests]))
         resolved = [self.style_vector(r.style) for r in requests]
+        options = self.for_genres(options, [style.genre for _, style in resolved])
         styles = torch.stack([vector for vector, _ in resolved])
         keep_style = torch.tensor([style.vector is not None for _, style in resolved])
         inpainting, known = None, None

@@ -15,6 +15,9 @@ from __future__ import annotations
 
 import torch
 
+from choreo.motion.vector import ROOT_SLICE
+
+FLOOR_CHANNELS = [ROOT_SLICE.start, ROOT_SLICE.start + 2]  # the root's x and z: where on the floor the dancer is
 CACHE_WINDOWS = 96  # about 1.4 MB of cached keys and values per window for the cpu model
 
 
@@ -30,12 +33,16 @@ class GuidedDenoiser:
     def __init__(self, model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor, guidance: float,
                  chunk_windows: int = 32, cache_windows: int = CACHE_WINDOWS,
                  interval: tuple[int, int] | None = None, style_guidance: float = 1.0,
-                 style_interval: tuple[int, int] | None = None, pace: float | None = None):
+                 style_interval: tuple[int, int] | None = None, pace: float | None = None,
+                 travel_guidance: float = 1.0):
         """``interval`` / ``style_interval`` (first, last): the diffusion steps t, inclusive, at which
         music / style guidance applies (None: all). ``pace``: m/s every window is asked to travel at,
-        in every block alike (a condition, not a guided term), for a network with a pace condition."""
+        in every block alike (a condition, not a guided term), for a network with a pace condition.
+        ``travel_guidance``: the share of both guidance terms the root's floor position gets (0: the
+        dancer travels as the conditional prediction alone; the guidance terms are what rush it)."""
         self.model, self.music, self.styles, self.keep_style, self.guidance = model, music, styles, keep_style, guidance
         self.pace = float("nan") if pace is None else float(pace)
+        self.travel_guidance = travel_guidance
         self.interval, self.style_guidance, self.style_interval = interval, style_guidance, style_interval
         styled = guides_style(style_guidance, keep_style)
         self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if styled else [])
@@ -79,12 +86,13 @@ class GuidedDenoiser:
             steps = torch.full((count * len(active),), t, dtype=torch.long)
             outputs = dict(zip(active, self.model.denoise(x.repeat(len(active), 1, 1), steps,
                                                           conditioning.rows(rows)).chunk(len(active))))
-            prediction = outputs["conditional"]
+            guided = torch.zeros_like(outputs["conditional"])
             if "no music" in outputs:
-                prediction = prediction + (self.guidance - 1) * (outputs["conditional"] - outputs["no music"])
+                guided += (self.guidance - 1) * (outputs["conditional"] - outputs["no music"])
             if "no style" in outputs:
-                prediction = prediction + (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
-            predictions.append(prediction)
+                guided += (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
+            guided[..., FLOOR_CHANNELS] *= self.travel_guidance
+            predictions.append(outputs["conditional"] + guided)
         return torch.cat(predictions)
 
 

@@ -19,6 +19,10 @@ FREE_STYLE_GUIDANCE, CONSTRAINED_STYLE_GUIDANCE = 2.0, 1.0
 # Music guidance, chosen on whole songs: more rushes whole dances past the real dancers' pace, less loses
 # kinetic realism (docs/results.md, "Whole songs").
 MUSIC_GUIDANCE = 2.0
+# The share of the guidance terms the root's floor position gets, per style genre (1 for the others, a free-text
+# style, none or a schedule of several): guided, a waltz travels 1.0-1.4 x its dancer's pace before the pace
+# pass; unguided 0.7-1.0 x, its jerk lower and its other targets met (docs/results.md, "Travel guidance").
+GENRE_TRAVEL_GUIDANCE = {"waltz": 0.0}
 # Guidance weights past this only amplify the network's error (at 1e308 the noise overflowed to NaN and
 # the whole dance was sampled before the NaN frames were refused); NaN and inf are refused with them.
 MAX_GUIDANCE = 20.0
@@ -51,6 +55,11 @@ class SamplingOptions:
     # m/s along the ground track, for a checkpoint trained with a pace condition (docs/sgmd.md, "Pace");
     # None: the genre's real pace (choreo.finishing.pace), or none for a free-text style
     pace: float | None = None
+    # the share of the guidance terms the root's floor position gets (0: it travels as the conditional prediction);
+    # None: its genre's (GENRE_TRAVEL_GUIDANCE)
+    travel_guidance: float | None = option(
+        None, "Share of the guidance the root's travel across the floor gets (0 = unguided, 1 = as the body).",
+        "--travel-guidance", default_text="0 for waltz, 1 otherwise")
     bundled_timesteps: ClassVar[int] = BUNDLED_TIMESTEPS  # the CLI checks steps on it before the checkpoint loads
 
     def __post_init__(self):
@@ -69,6 +78,8 @@ class SamplingOptions:
                            _checked_interval("style_guidance_interval", self.style_guidance_interval))
         if self.pace is not None and not 0.0 <= self.pace <= 3.0:  # NaN too; real dancers' fastest genre: 1.2
             raise ValueError(f"pace must be 0 to 3 m/s, got {self.pace:g}")
+        if self.travel_guidance is not None and not 0.0 <= self.travel_guidance <= 1.0:  # NaN too
+            raise ValueError(f"travel_guidance must be 0 to 1, got {self.travel_guidance:g}")
         if min(self.chunk_windows, self.block_windows, self.resample) < 1:
             raise ValueError("chunk_windows, block_windows and resample must be >= 1")
 

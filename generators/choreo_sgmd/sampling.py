@@ -219,13 +219,15 @@ def _sample_block(model, schedule: NoiseSchedule, music: torch.Tensor, style: to
 def guided_denoiser(model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor,
                     options: SamplingOptions, schedule: NoiseSchedule) -> GuidedDenoiser:
     """The options' guidance on a set of windows (``options`` resolved: its guidance weights set); the
-    music's default interval depends on whether any window has a style to guide."""
+    music's default interval depends on whether any window has a style to guide. A travel share not
+    decided by a genre (``SGMDGenerator.for_genres``) is 1: the travel guided as the body."""
     if options.guidance is None or options.style_guidance is None:
         raise ValueError("resolve the sampling options first (SamplingOptions.resolved)")
     return GuidedDenoiser(model, music, styles, keep_style, options.guidance, options.chunk_windows,
                           interval=options.guided_steps(schedule.timesteps, guides_style(options.style_guidance, keep_style)),
                           style_guidance=options.style_guidance,
-                          style_interval=options.style_guided_steps(schedule.timesteps), pace=options.pace)
+                          style_interval=options.style_guided_steps(schedule.timesteps), pace=options.pace,
+                          travel_guidance=1.0 if options.travel_guidance is None else options.travel_guidance)
 
 
 @torch.no_grad()

@@ -170,6 +170,42 @@ def test_style_guidance_adds_its_own_term_beside_music_guidance():
     assert unstyled.evaluations_at(400) == 2  # no window has a style: the style term is not evaluated at all
 
 
+def test_travel_guidance_leaves_the_floor_position_to_the_conditional_prediction():
+    from choreo_sgmd.guidance import FLOOR_CHANNELS, GuidedDenoiser
+    from choreo_sgmd.options import SamplingOptions
+
+    model = Denoiser(TINY).eval()
+    x, _, music, style = inputs(batch=3)
+    keep_style = torch.ones(3, dtype=torch.bool)
+    with torch.no_grad():
+        conditional = model(x, torch.full((3,), 300), music, style, keep_style=keep_style)
+        full = GuidedDenoiser(model, music, style, keep_style, 2.0, style_guidance=2.0)(x, 300)
+        for share in (0.0, 0.5):
+            travel = GuidedDenoiser(model, music, style, keep_style, 2.0, style_guidance=2.0, travel_guidance=share)(x, 300)
+            floor = conditional[..., FLOOR_CHANNELS] + share * (full - conditional)[..., FLOOR_CHANNELS]
+            torch.testing.assert_close(travel[..., FLOOR_CHANNELS], floor, atol=1e-5, rtol=1e-5)
+            rest = [c for c in range(full.shape[-1]) if c not in FLOOR_CHANNELS]
+            torch.testing.assert_close(travel[..., rest], full[..., rest], atol=1e-5, rtol=1e-5)
+    assert not torch.allclose(full[..., FLOOR_CHANNELS], conditional[..., FLOOR_CHANNELS])  # guidance did move it
+    for share in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="travel_guidance"):
+            SamplingOptions(travel_guidance=share)
+
+
+def test_a_waltz_travels_unguided_unless_told(tiny_generator):
+    from choreo_sgmd.options import SamplingOptions
+
+    def share(genres, **given):
+        return tiny_generator.for_genres(SamplingOptions(**given), genres).travel_guidance
+
+    assert share(["waltz"]) == 0.0 and share(["waltz", "waltz"]) == 0.0
+    assert share(["cha-cha"]) == share([None]) == share(["waltz", "rumba"]) == 1.0  # other, none, a schedule of several
+    assert share(["waltz"], travel_guidance=0.5) == 0.5  # what the user gives stays
+    music = Music.from_array(np.random.default_rng(0).normal(size=22050 * 3) * 0.1, 22050)
+    dance = tiny_generator.generate(GenerationRequest(music, style="waltz", seed=0, options={"steps": 2}))
+    assert dance.metadata["travel_guidance"] == 0.0
+
+
 def test_style_guidance_applies_only_inside_its_own_interval():
     from choreo_sgmd.guidance import GuidedDenoiser
     from choreo_sgmd.options import SamplingOptions

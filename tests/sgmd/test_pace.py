@@ -104,8 +104,8 @@ def test_a_trained_network_gains_a_pace_condition_and_is_asked_for_its_genres_pa
 
 def test_a_pace_for_a_network_without_one_is_refused(tiny_generator):
     with pytest.raises(ParameterError, match="not trained with a pace condition"):
-        tiny_generator.with_pace(SamplingOptions(pace=0.4), ["waltz"])
-    assert tiny_generator.with_pace(SamplingOptions(), ["waltz"]).pace is None
+        tiny_generator.for_genres(SamplingOptions(pace=0.4), ["waltz"])
+    assert tiny_generator.for_genres(SamplingOptions(), ["waltz"]).pace is None
     for bad in (-0.1, NAN, 4.0):
         with pytest.raises(ValueError, match="pace"):
             SamplingOptions(pace=bad)
