@@ -120,7 +120,9 @@ VALIDATION_TRAVEL = [("1, every genre (the default until now)", "validation-trav
                      ("0 in waltz, 1 in cha-cha and rumba (the default now)", "validation-travel-0-waltz"),
                      ("1, seeds 3-5", "validation-travel-guided-seeds-3-5"),
                      ("0.5, seeds 3-5", "validation-travel-0.5-seeds-3-5"), ("0, seeds 3-5", "validation-travel-0-seeds-3-5"),
-                     ("0 in waltz, seeds 3-5", "validation-travel-0-waltz-seeds-3-5")]
+                     ("0 in waltz, seeds 3-5", "validation-travel-0-waltz-seeds-3-5"),
+                     ("1, training seed 1", "validation-seed1-travel-guided"),
+                     ("0 in waltz, training seed 1", "validation-seed1-travel-0-waltz")]
 VALIDATION_PACE_CONDITION = [("the held-out model (travel guided in every genre)", "validation-travel-guided"),
                              ("the same recipe with the pace condition, asked the genre's pace (travel guided)",
                               "validation-pace-condition"),
