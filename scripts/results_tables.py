@@ -41,6 +41,7 @@ SUMMARY = [
     ("SGMD, guidance 2, root path, pace (this morning)", "sgmd-no-accent", ()),
     ("SGMD + accent (the fourth session)", "sgmd-latin-footsteps-0.65", ()),
     ("SGMD + Latin footsteps 0.75 (the fifth session)", "sgmd-latin-footsteps-0.75", ()),
+    ("SGMD, half the guidance on a waltz's travel (measured, not kept)", "sgmd-travel-0.5-waltz", ()),
     ("**SGMD now** (+ travel unguided in waltz)", "sgmd", ("jerk", "root_jerk")),
     ("ChoreoGraph before", "graph-before-2026-12-05", ()),
     ("ChoreoGraph, root path, pace (this morning)", "graph-no-floor-no-accent", ()),
@@ -117,11 +118,14 @@ VALIDATION_SAMPLER_PACE = [("none (the defaults)", "validation-step12000-latin-0
                            ("within 1.5 x, noise levels up to 0.5", "validation-sampler-pace-1.5-below-0.5")]
 VALIDATION_TRAVEL = [("1, every genre (the default until now)", "validation-travel-guided"),
                      ("0.5, every genre", "validation-travel-0.5"), ("0, every genre", "validation-travel-0"),
+                     ("0.5 in waltz, 1 in cha-cha and rumba", "validation-travel-0.5-waltz"),
                      ("0 in waltz, 1 in cha-cha and rumba (the default now)", "validation-travel-0-waltz"),
                      ("1, seeds 3-5", "validation-travel-guided-seeds-3-5"),
                      ("0.5, seeds 3-5", "validation-travel-0.5-seeds-3-5"), ("0, seeds 3-5", "validation-travel-0-seeds-3-5"),
+                     ("0.5 in waltz, seeds 3-5", "validation-travel-0.5-waltz-seeds-3-5"),
                      ("0 in waltz, seeds 3-5", "validation-travel-0-waltz-seeds-3-5"),
                      ("1, training seed 1", "validation-seed1-travel-guided"),
+                     ("0.5 in waltz, training seed 1", "validation-seed1-travel-0.5-waltz"),
                      ("0 in waltz, training seed 1", "validation-seed1-travel-0-waltz")]
 VALIDATION_PACE_CONDITION = [("the held-out model (travel guided in every genre)", "validation-travel-guided"),
                              ("the same recipe with the pace condition, asked the genre's pace (travel guided)",

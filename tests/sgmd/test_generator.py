@@ -192,18 +192,19 @@ def test_travel_guidance_leaves_the_floor_position_to_the_conditional_prediction
             SamplingOptions(travel_guidance=share)
 
 
-def test_a_waltz_travels_unguided_unless_told(tiny_generator):
-    from choreo_sgmd.options import SamplingOptions
+def test_a_waltz_travel_gets_its_share_of_guidance_unless_told(tiny_generator):
+    from choreo_sgmd.options import GENRE_TRAVEL_GUIDANCE, SamplingOptions
 
     def share(genres, **given):
         return tiny_generator.for_genres(SamplingOptions(**given), genres).travel_guidance
 
-    assert share(["waltz"]) == 0.0 and share(["waltz", "waltz"]) == 0.0
+    waltz = GENRE_TRAVEL_GUIDANCE["waltz"]
+    assert waltz < 1.0 and share(["waltz"]) == share(["waltz", "waltz"]) == waltz
     assert share(["cha-cha"]) == share([None]) == share(["waltz", "rumba"]) == 1.0  # other, none, a schedule of several
-    assert share(["waltz"], travel_guidance=0.5) == 0.5  # what the user gives stays
+    assert share(["waltz"], travel_guidance=0.0) == 0.0 and share(["rumba"], travel_guidance=0.0) == 0.0  # given: kept
     music = Music.from_array(np.random.default_rng(0).normal(size=22050 * 3) * 0.1, 22050)
     dance = tiny_generator.generate(GenerationRequest(music, style="waltz", seed=0, options={"steps": 2}))
-    assert dance.metadata["travel_guidance"] == 0.0
+    assert dance.metadata["travel_guidance"] == waltz
 
 
 def test_style_guidance_applies_only_inside_its_own_interval():
