@@ -165,6 +165,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--generator", default="sgmd")
     parser.add_argument("--checkpoint", default=None)
+    parser.add_argument("--repertoire", default=None, help="ChoreoGraph: this repertoire instead of the bundled one")
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--split", default="test", choices=["validation", "test"])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
@@ -189,7 +190,8 @@ def main() -> None:
     reference_windows = scoring_windows(select_split(clips, TRAIN))
     reference = [motion_features(w.motion.joint_positions()) for w in reference_windows]
     reference = (np.stack([k for k, _ in reference]), np.stack([g for _, g in reference]))
-    backend = choreo.load_backend(args.generator, args.checkpoint)
+    backend = choreo.load_backend(args.generator, args.checkpoint,
+                                  **({"repertoire": args.repertoire} if args.repertoire else {}))
     options = parse_pairs(args.option)
     finishing = replace(Finishing(), **parse_pairs(args.finishing), configs=pass_configs(args.settings))
     started = time.time()
