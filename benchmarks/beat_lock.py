@@ -81,7 +81,8 @@ def generated(backends: dict, music: Music, where: str) -> dict[str, np.ndarray]
     for name, backend in backends.items():
         motion = backend.generate(GenerationRequest(music, seed=SEED))
         started = time.perf_counter()
-        locked = finish(motion, music.beat_frames) if FINISHED else beat_lock(motion, music.beat_frames).motion
+        locked = (finish(motion, music.beat_frames, audible=music.audible) if FINISHED
+                  else beat_lock(motion, music.beat_frames).motion)
         LOCK_SECONDS.append((time.perf_counter() - started, motion.duration))
         for label, dance in ((name, motion), (f"{name} + {'finishing' if FINISHED else 'beat lock'}", locked)):
             positions = dance.joint_positions()

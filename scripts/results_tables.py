@@ -99,6 +99,13 @@ VALIDATION_FEET = [("the plan + 0.35 of the glide and of the quick moves (the de
                    ("the plan + 0.5 of the quick moves", "validation-step12000-footsteps-split-1-0.5"),
                    ("the plan + 0.7 of the quick moves", "validation-step12000-footsteps-split-1-0.7"),
                    ("the plan + 0.15 of the glide + 0.7 of the quick moves", "validation-step12000-footsteps-split-0.85-0.7")]
+VALIDATION_LATIN_SPLIT = [("the plan + 0.25 of the glide and of the quick moves (the defaults)", "validation-latin-split-base"),
+                          ("the plan + 0.5 of the quick moves", "validation-latin-split-1-0.5"),
+                          ("the plan + 0.7 of the quick moves", "validation-latin-split-1-0.7"),
+                          ("the plan + 0.1 of the glide + 0.5 of the quick moves", "validation-latin-split-0.9-0.5"),
+                          ("the defaults, seeds 3-5", "validation-latin-split-base-seeds-3-5"),
+                          ("the plan + 0.5 of the quick moves, seeds 3-5", "validation-latin-split-1-0.5-seeds-3-5"),
+                          ("the plan + 0.7 of the quick moves, seeds 3-5", "validation-latin-split-1-0.7-seeds-3-5")]
 VALIDATION_GRAPH = [("no floor (the defaults until now)", "validation-graph-no-floor"),
                     ("floor 3 m (the default)", "validation-graph-floor-3"), ("floor 2 m", "validation-graph-floor-2"),
                     ("floor 3 m, accent 0.2", "validation-graph-floor-3-accent"),
@@ -266,6 +273,7 @@ VALIDATION_TABLES = {
     "whole-songs-validation-accent": ("accent depth", VALIDATION_ACCENT),
     "whole-songs-validation-feet": ("where the ankles go", VALIDATION_FEET),
     "whole-songs-validation-graph": ("ChoreoGraph", VALIDATION_GRAPH),
+    "whole-songs-validation-latin-split": ("where a cha-cha's or a rumba's ankles go", VALIDATION_LATIN_SPLIT),
     "whole-songs-validation-latin": ("footsteps strength, cha-cha and rumba", VALIDATION_LATIN),
     "whole-songs-validation-sampler-pace": ("the sampler's pull toward the genre's pace", VALIDATION_SAMPLER_PACE),
     "whole-songs-validation-travel": ("guidance on the travel (share)", VALIDATION_TRAVEL),

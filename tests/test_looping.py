@@ -69,6 +69,9 @@ def test_the_loop_is_danced_to_its_end_then_itself_then_its_opening():
     np.testing.assert_allclose(beats[beats >= 14.0], np.arange(0.25, 4.0, 0.5) + 14.0)
     danced = loop.music(song, loop.after)  # what the two takes dance: a second of the opening after the end
     assert danced.num_frames == 120 + 300 + 30 and danced.beat_times[-1] == pytest.approx(14.75)
+    loud = Music(path=None, duration=song.duration, fps=30.0, features=song.features, beat_times=song.beat_times,
+                 tempo=song.tempo, loudness=np.arange(song.num_frames, dtype=np.float32))
+    np.testing.assert_array_equal(loop.music(loud).loudness, order)  # the loudness goes round with the frames
 
 
 def test_a_bend_runs_the_end_into_the_given_frames_pose_and_velocity():

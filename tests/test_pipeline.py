@@ -241,3 +241,18 @@ def test_a_song_that_cannot_be_read_exits_with_one_line(tmp_path):
         assert done.returncode == 2, done.stderr
         assert len(done.stderr.strip().splitlines()) == 1 and "noise.wav" in done.stderr
         assert not (tmp_path / "d.bvh").exists()
+
+
+def test_a_song_ending_in_silence_gets_a_dancer_at_rest_there(tiny_checkpoint):
+    import soundfile as sf
+    from choreo.motion.beats import mean_joint_speed
+
+    samples, sr = sf.read(SONG, dtype="float32", frames=22050 * 6)
+    samples = samples.mean(axis=1) if samples.ndim > 1 else samples
+    song = Music.from_array(np.concatenate([samples, np.zeros(3 * sr, np.float32)]), sr)
+    assert abs(song.audible[1] - 180) <= 8
+    dance = choreo.dance(song, checkpoint=tiny_checkpoint, seed=1)
+    assert np.all(mean_joint_speed(dance.joint_positions())[215:] < 1e-9)  # at rest through the last seconds
+    assert 5.5 <= dance.metadata["rest"]["rests_from"] <= 6.3
+    dancing = choreo.dance(song, checkpoint=tiny_checkpoint, seed=1, finishing=Finishing(rest=False))
+    assert mean_joint_speed(dancing.joint_positions())[215:].mean() > 1e-3

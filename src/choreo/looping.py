@@ -85,7 +85,8 @@ class Loop:
         beats = np.r_[times[times >= (self.frames - self.lead_in) / music.fps] - self.frames / music.fps + lead,
                       times + lead, times[times < after / music.fps] + lead + self.frames / music.fps]
         return replace(music, features=music.features[order], beat_times=beats, duration=len(order) / music.fps,
-                       log_mel=None if music.log_mel is None else music.log_mel[order])
+                       log_mel=None if music.log_mel is None else music.log_mel[order],
+                       loudness=None if music.loudness is None else music.loudness[order])
 
     def constraints(self, first: Motion, cycle: tuple[float, np.ndarray]):
         """``first``'s lead-in and opening kept, and its opening given again, turned and moved by

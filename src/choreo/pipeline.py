@@ -44,6 +44,7 @@ class Finishing:
     accent: bool = option(True, "Ease into and out of each motion beat, marking it as clearly as real dancers do.")
     footsteps: bool = option(True, "Plan steps: each foot stands until the body leaves it, then steps (legs by IK).")
     beat_lock: bool = option(True, "Re-time the dance so its motion beats land on the music's beats (given frames stay).")
+    rest: bool = option(True, "Wait through a song's opening silence and come to rest in its closing silence.")
     foot_lock: bool = option(False, "Let planted feet carry the body instead of sliding (docs/results.md, \"Feet\").")
     # A pass's settings by its name, e.g. {"footsteps": FootstepsConfig(strength=0.8)}; absent: its defaults.
     configs: Mapping[str, Any] = field(default_factory=dict)
@@ -165,7 +166,7 @@ class DanceRequest:
         else:  # The backend's dance goes straight into finish, which lets go of it after the first pass:
             # an hour's raw dance kept here beside the finished one would add to the peak memory.
             finished = finish(backend.generate(self.generation(music, fixed), progress=progress), music.beat_frames,
-                              self.finishing, fixed)
+                              self.finishing, fixed, audible=music.audible)
         finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
         return finished
 

@@ -82,6 +82,7 @@ def test_info_on_example_song(capsys):
     code, out, _ = run_cli(capsys, "info", EXAMPLE_SONG)
     assert code == 0
     assert "bpm" in out and "beats" in out
+    assert "music           0.00-11.30 s" in out  # the loop's last 0.23 s are its decay (choreo.music.loudness)
 
 
 def test_convert_bvh_to_npz_and_back(tmp_path, capsys):

@@ -68,6 +68,9 @@ def info(
         table.add_row("tempo", f"{music.tempo:.1f} bpm")
         table.add_row("beats", markup(f"{len(music.beat_times)} ({music.beat_source})"))
         table.add_row("beat times", _first_times(music.beat_times))
+        first, stop = music.audible
+        table.add_row("music", f"{first / music.fps:.2f}-{stop / music.fps:.2f} s (quieter around it: 40 dB under its "
+                               "loud parts)")
         table.add_row("feature frames", f"{music.num_frames} at {music.fps:g} fps")
     else:
         from ..formats import read_motion

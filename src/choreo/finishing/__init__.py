@@ -17,6 +17,7 @@ from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
 from .foot_lock import FootLockConfig, foot_lock
 from .footsteps import FootstepsConfig, footsteps
 from .pace import PaceConfig, pace
+from .rest import RestConfig, rest
 from .root_path import RootPathConfig, root_path
 from .speed_limit import SpeedLimitConfig, speed_limit
 
@@ -26,18 +27,22 @@ if TYPE_CHECKING:
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing | None" = None,
-           constraints: "Constraints | np.ndarray | None" = None, anchors: np.ndarray | None = None) -> Motion:
+           constraints: "Constraints | np.ndarray | None" = None, anchors: np.ndarray | None = None,
+           audible: tuple[int, int] | None = None) -> Motion:
     """``motion`` through the passes ``finishing`` turns on (default: as `choreo generate` does);
     frames the ``constraints`` give (or a (T,) mask of fixed frames) stay. ``anchors``, a (T,) mask,
     are frames the re-timing leaves at their times (a loop's seam) while every pass still works on
-    them. Each pass runs with the settings ``finishing.configs`` gives it, or its own defaults.
+    them. ``audible``, frames [first, stop) with music (Music.audible), lets the dancer wait before
+    them and rest after them; None: music throughout. Each pass runs with the settings
+    ``finishing.configs`` gives it, or its own defaults.
 
     The order: the speed limit first, so that a glitch is not taken for a motion beat, and last,
     since re-timing stretches speeds. The root path and the pace before the footsteps, which plant
     the feet along the travel as it will be. The accent before the footsteps and the beat lock, which
     plan the feet and lock the beats of the dance as it will be timed. Footsteps before the beat lock: they move the motion
     beats (a leg's swing is part of the body's speed), and a re-timing keeps a standing foot
-    standing (docs/results.md, "Feet")."""
+    standing (docs/results.md, "Feet"). Rest after the beat lock: it re-times only the quiet ends,
+    so the beats locked in between stay."""
     from ..pipeline import Finishing
 
     on = finishing or Finishing()
@@ -45,23 +50,27 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
     fixed = constraints.fixed_frames() if hasattr(constraints, "fixed_frames") else constraints
     timed = fixed if anchors is None else np.asarray(anchors, bool) | (False if fixed is None else np.asarray(fixed, bool))
     passes = ((on.speed_limit, speed_limit, fixed), (on.root_path, root_path, fixed), (on.pace, pace, fixed),
-              (on.accent, accent, timed), (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, timed), (on.foot_lock, foot_lock, fixed))
+              (on.accent, accent, timed), (on.footsteps, footsteps, constraints), (on.beat_lock, beat_lock, timed),
+              (on.rest and audible is not None, rest, timed), (on.foot_lock, foot_lock, fixed))
     for enabled, run, kept in passes:
         if enabled:
-            motion = _run(run, motion, music_beat_frames, kept, settings.get(run.__name__))
+            motion = _run(run, motion, music_beat_frames, kept, settings.get(run.__name__), audible)
     if on.speed_limit and (on.beat_lock or on.foot_lock or on.footsteps):
         motion = _run(speed_limit, motion, music_beat_frames, fixed, settings.get("speed_limit"))
     return motion
 
 
-def _run(run, motion: Motion, music_beat_frames: np.ndarray, fixed, config) -> Motion:
-    """One pass with its config (or its default); the beat lock also takes the music's beats."""
+def _run(run, motion: Motion, music_beat_frames: np.ndarray, fixed, config, audible=None) -> Motion:
+    """One pass with its config (or its default); the beat lock also takes the music's beats,
+    rest the music's audible span."""
     extra = {} if config is None else {"config": config}
     if run is beat_lock:
         return run(motion, music_beat_frames, fixed, **extra).motion
+    if run is rest:
+        return run(motion, audible, fixed, **extra)
     return run(motion, fixed, **extra)
 
 
-__all__ = ["AccentConfig", "BeatLockConfig", "BeatLockResult", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RootPathConfig",
-           "SpeedLimitConfig", "accent", "beat_lock", "finish", "foot_lock", "footsteps", "lock_warp", "pace", "root_path",
-           "speed_limit"]
+__all__ = ["AccentConfig", "BeatLockConfig", "BeatLockResult", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RestConfig",
+           "RootPathConfig", "SpeedLimitConfig", "accent", "beat_lock", "finish", "foot_lock", "footsteps", "lock_warp",
+           "pace", "rest", "root_path", "speed_limit"]

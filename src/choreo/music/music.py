@@ -14,6 +14,7 @@ from .audio import check_usable, iter_audio_blocks
 from . import madmom_tracker  # light: madmom itself loads only when asked for
 from .beat_source import BeatSource
 from .beats import BEAT_HOP, onset_envelopes
+from .loudness import LoudnessStream, audible_span, frame_loudness
 from .mel import LogMelStream, fit_length, log_mel as log_mel_of
 from .features import BEAT_COLUMN, FEATURE_DIM, FPS, HOP_LENGTH, SAMPLE_RATE, assemble_features, frame_features, stream_features
 
@@ -38,6 +39,8 @@ class Music:
             the log-mel skip the constant-Q transform).
         beat_source: where the beats come from (BeatSource.label): "tracked", "bpm N" or the
             name of the beats file the user gave.
+        loudness: (T,) dBFS per frame (choreo.music.loudness), or None for music rebuilt from
+            stored features (then the whole song counts as audible).
     """
 
     path: Path | None
@@ -50,10 +53,16 @@ class Music:
     log_mel: np.ndarray | None = None  # (T, 96), for backends that listen to the spectrum
     timbre: bool = True  # False: MFCC and chroma columns are zeros (analysed for rhythm only)
     beat_source: str = "tracked"
+    loudness: np.ndarray | None = None  # (T,) dBFS
 
     @property
     def num_frames(self) -> int:
         return len(self.features)
+
+    @property
+    def audible(self) -> tuple[int, int]:
+        """Frames [first, stop) from the first to the last moment with music to dance to."""
+        return (0, self.num_frames) if self.loudness is None else audible_span(self.loudness, self.fps)
 
     @property
     def beat_frames(self) -> np.ndarray:
@@ -93,7 +102,8 @@ class Music:
             total = (end if end is not None else audio_duration(path)) - (start or 0.0)
             report = lambda done: progress(min(done, total), total)  # noqa: E731
         blocks = iter_audio_blocks(path, SAMPLE_RATE, start, end)
-        mel = LogMelStream() if log_mel else None
+        mel, loudness = LogMelStream() if log_mel else None, LoudnessStream()
+        blocks = _also_into(blocks, loudness)
         if mel is not None:
             blocks = _also_into(blocks, mel)
         heard = beats.excerpt(start or 0.0, end).heard(lambda: madmom_tracker.track_file(path, start, end))
@@ -101,7 +111,7 @@ class Music:
         return cls(path=path, duration=_duration(features), fps=float(FPS), features=features, beat_times=beat_times,
                    tempo=tempo, start=start or 0.0,
                    log_mel=None if mel is None else fit_length(mel.finish(), len(features)), timbre=timbre,
-                   beat_source=beats.label)
+                   beat_source=beats.label, loudness=loudness.finish()[: len(features)])
 
     @classmethod
     def from_array(cls, samples: np.ndarray, sr: int, log_mel: bool = False, timbre: bool = True,
@@ -123,7 +133,7 @@ class Music:
         return cls(path=None, duration=_duration(features), fps=float(FPS), features=features,
                    beat_times=beat_times, tempo=tempo,
                    log_mel=log_mel_of(samples, len(features)) if log_mel else None, timbre=timbre,
-                   beat_source=beats.label)
+                   beat_source=beats.label, loudness=frame_loudness(samples)[: len(features)])
 
 
 def _also_into(blocks: Iterable[np.ndarray], sink) -> Iterator[np.ndarray]:

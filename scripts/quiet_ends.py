@@ -1,0 +1,56 @@
+"""How much of each outside song is silence at its ends, and where the rest pass stops the dancer.
+
+    python scripts/quiet_ends.py            # the LMMS demo songs (benchmarks/outside_songs.py renders them)
+    python scripts/quiet_ends.py --dance    # also dance each (SGMD, defaults, seed 0) and read its metadata
+
+For docs/results.md, "Finishing passes" (Rest). Silence is choreo.music.loudness.audible_span's:
+more than 40 dB under the song's loud level.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "benchmarks"))
+from outside_songs import outside_songs  # noqa: E402
+
+import choreo  # noqa: E402
+from choreo.motion.beats import mean_joint_speed  # noqa: E402
+from choreo.music import Music  # noqa: E402
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dance", action="store_true", help="also dance each song and report where it rests")
+    args = parser.parse_args()
+    songs = outside_songs()
+    if not songs:
+        sys.exit("no outside songs: apt-get install lmms")
+    print("| song | seconds | music from | music until | quiet tail s |" + (" rests from | still after the music |" if args.dance else ""))
+    print("| --- | ---: | ---: | ---: | ---: |" + (" ---: | ---: |" if args.dance else ""))
+    tails = []
+    for song in songs:
+        music = Music.from_file(song.path, timbre=args.dance)
+        first, stop = music.audible
+        tail = (music.num_frames - stop) / music.fps
+        tails.append(tail)
+        row = f"| {song.name} | {music.duration:.1f} | {first / music.fps:.1f} | {stop / music.fps:.1f} | {tail:.1f} |"
+        if args.dance:
+            dance = choreo.dance(music, style="cha-cha", seed=0)
+            rests = dance.metadata.get("rest", {}).get("rests_from")
+            speed = mean_joint_speed(dance.joint_positions()) * dance.fps
+            after = speed[stop + round(music.fps):]  # from a second after the music: the ease is over
+            still = "-" if len(after) == 0 else f"{np.mean(after < 1e-6):.2f}"
+            row += f" {'-' if rests is None else f'{rests:.1f}'} | {still} |"
+        print(row, flush=True)
+    tails = np.array(tails)
+    print(f"\n{len(tails)} songs; quiet tail of 1 s or more: {int((tails >= 1).sum())}; median tail {np.median(tails):.1f} s")
+
+
+if __name__ == "__main__":
+    main()
