@@ -1,10 +1,10 @@
 """Rest: where the song has not begun the dancer waits, and where it has ended the dancer stops.
 
 The backends dance every frame they are given, so a song that ends on ten seconds of silence
-got ten seconds of dancing to nothing (20 of the 25 LMMS demo songs end on more than a second of
-it). Here the dance is re-timed at its quiet ends (choreo.music.loudness.audible_span): over the
-last ``ease_seconds`` of the music its playback slows smoothly to a stop, on the stillest pose
-near the music's end, and holds that pose; before the music it holds the stillest pose near the
+got ten seconds of dancing to nothing (15 of the 25 LMMS demo songs end on a second or more of
+it: docs/results.md, "Finishing passes"). Here the dance is re-timed at its quiet ends
+(choreo.music.loudness.audible_span): over ``ease_seconds`` its playback slows smoothly to a stop
+on the stillest pose near the music's end, and holds that pose; before the music it holds the stillest pose near the
 music's start and sets off from it, reaching the dance's own timing as the music comes in. Between
 the two the timing is untouched, so every beat the beat lock placed stays where it is. An end
 with a frame a user fixed is left as it is.

@@ -1,7 +1,7 @@
 """Loudness at the motion frame rate, and the span of a song where there is music to dance to.
 
 Many songs open with a moment of silence or end on seconds of it (a reverb dying away, a
-renderer's padding): 20 of the 25 LMMS demo songs have more than a second of quiet tail. A dancer
+renderer's padding): 15 of the 25 LMMS demo songs end on a second or more of it. A dancer
 waits through the first and comes to rest in the second (choreo.finishing.rest); this module
 finds them. Frame t's loudness is the RMS of samples [t * hop, (t + 1) * hop) in dBFS, so a song of
 n samples has n // hop frames, like its features.
