@@ -45,7 +45,15 @@ def test_short_silences_are_danced_through_and_a_song_without_one_is_unchanged()
     assert rest(motion, (20, 345)) is motion  # 0.7 s and 0.5 s: under a second each
     assert rest(motion, (0, 360)) is motion
     assert rest(motion, None) is motion
-    assert rest(motion, (150, 190)) is motion  # too little music to set off and stop in
+    assert rest(motion, (170, 174)) is motion  # a click, not music: no time to set off and stop
+
+
+def test_a_short_burst_of_music_gets_quicker_eases_and_stillness_around_it():
+    motion = walk()
+    out = rest(motion, (150, 190))  # 1.3 s of music in 12 s
+    speed = mean_joint_speed(out.joint_positions())
+    assert np.all(speed[:135] < 1e-9) and np.all(speed[205:] < 1e-9)
+    assert speed[160:180].min() > 0.5 * mean_joint_speed(motion.joint_positions()).mean()  # dancing in between
 
 
 def test_an_end_with_a_fixed_frame_keeps_its_timing_and_the_other_rests():

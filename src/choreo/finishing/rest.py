@@ -47,8 +47,11 @@ def rest(motion: Motion, audible: tuple[int, int] | None, fixed: np.ndarray | No
     ease, search = config.ease_seconds * motion.fps, config.search_seconds * motion.fps
     silence = config.min_silence_seconds * motion.fps
     quiet_opening, quiet_ending = start >= silence, frames - stop >= silence
-    if not (quiet_opening or quiet_ending) or stop - start < 2 * ease + 2 * search:  # nothing to do, or too
-        return motion  # little music to both set off and stop in
+    room = 2 * (ease + search)  # music enough to set off, dance and stop without the two eases overlapping
+    if stop - start < room:  # a short burst of music: quicker eases, poses nearer its ends
+        ease, search = ease * (stop - start) / room, search * (stop - start) / room
+    if not (quiet_opening or quiet_ending) or ease < 2:
+        return motion
     speed = smoothed_speed(motion.joint_positions())
     source = np.arange(frames, dtype=np.float64)
     waits = quiet_opening and _retime_opening(source, _stillest(speed, start, search), ease, fixed)
