@@ -22,6 +22,7 @@ on the validation clips, so for it the test split is what settings are chosen on
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import time
 from dataclasses import replace
@@ -217,9 +218,10 @@ def main() -> None:
         print(f"{who}: {f['windows']} windows, FID_k {f['fid_k'][0]:.2f} [{f['fid_k'][1]:.2f}, {f['fid_k'][2]:.2f}], "
               f"FID_g {f['fid_g'][0]:.2f} [{f['fid_g'][1]:.2f}, {f['fid_g'][2]:.2f}]")
     outside = {song: dance_outside(song, backend, args, options, finishing) for song in args.outside}
-    if args.json:
+    if args.json:  # an outside song's file by its hash: LMMS renders a song differently each time
+        heard = {song: hashlib.sha256(Path(song).read_bytes()).hexdigest() for song in args.outside}
         Path(args.json).write_text(json.dumps({"args": vars(args), "songs": log, "fid": fids, "real_fid": real_fids,
-                                               "outside": outside}, indent=1, default=float))
+                                               "outside": outside, "outside_sha256": heard}, indent=1, default=float))
 
 
 def dance_outside(song: str, backend, args, options: dict, finishing: Finishing) -> dict:
