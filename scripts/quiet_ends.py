@@ -23,6 +23,8 @@ import choreo  # noqa: E402
 from choreo.motion.beats import mean_joint_speed  # noqa: E402
 from choreo.music import Music  # noqa: E402
 
+ANKLES = [7, 8]  # SMPL-24's left and right ankle
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -31,8 +33,9 @@ def main() -> None:
     songs = outside_songs()
     if not songs:
         sys.exit("no outside songs: apt-get install lmms")
-    print("| song | seconds | music from | music until | quiet tail s |" + (" rests from | still after the music |" if args.dance else ""))
-    print("| --- | ---: | ---: | ---: | ---: |" + (" ---: | ---: |" if args.dance else ""))
+    print("| song | seconds | music from | music until | quiet tail s |"
+          + (" rests from | still after the music | feet at rest, cm above standing |" if args.dance else ""))
+    print("| --- | ---: | ---: | ---: | ---: |" + (" ---: | ---: | ---: |" if args.dance else ""))
     tails = []
     for song in songs:
         music = Music.from_file(song.path, timbre=args.dance)
@@ -43,10 +46,15 @@ def main() -> None:
         if args.dance:
             dance = choreo.dance(music, style="cha-cha", seed=0)
             rests = dance.metadata.get("rest", {}).get("rests_from")
-            speed = mean_joint_speed(dance.joint_positions()) * dance.fps
+            positions = dance.joint_positions()
+            speed = mean_joint_speed(positions) * dance.fps
             after = speed[stop + round(music.fps):]  # from a second after the music: the ease is over
             still = "-" if len(after) == 0 else f"{np.mean(after < 1e-6):.2f}"
-            row += f" {'-' if rests is None else f'{rests:.1f}'} | {still} |"
+            ankles = positions[:, ANKLES, 1]
+            standing = np.median(ankles.min(axis=1))  # the lower ankle's usual height: a foot on the floor
+            at_rest = rests is not None and rests < music.duration - 0.1  # not only a wait at the start
+            feet = " / ".join(f"{100 * (h - standing):.0f}" for h in ankles[-1]) if at_rest else "-"
+            row += f" {'-' if rests is None else f'{rests:.1f}'} | {still} | {feet} |"
         print(row, flush=True)
     tails = np.array(tails)
     print(f"\n{len(tails)} songs; quiet tail of 1 s or more: {int((tails >= 1).sum())}; median tail {np.median(tails):.1f} s")

@@ -5,6 +5,7 @@ import pytest
 
 from choreo.errors import ParameterError
 from choreo.finishing import RestConfig, finish, rest
+from choreo.motion import Motion
 from choreo.motion.beats import mean_joint_speed
 from choreo.pipeline import Finishing
 
@@ -38,6 +39,19 @@ def test_it_slows_to_a_stop_and_sets_off_without_a_jump():
     assert root_steps.max() <= np.linalg.norm(np.diff(motion.root_positions, axis=0), axis=-1).max() + 1e-9
     slowing = after[235:300]  # the ease into the final pose is gradual, not a cut
     assert np.sum((slowing > 0.2 * before.max()) & (slowing < 0.8 * before.max())) >= 5
+
+
+def test_the_pose_held_has_both_feet_on_the_floor_even_where_a_raised_leg_is_stiller():
+    t = np.arange(360) / FPS
+    axis_angle = np.zeros((360, 24, 3))
+    axis_angle[:, 16:22] = 0.3 * np.sin(2 * np.pi * t)[:, None, None]  # the walk's arms
+    axis_angle[262:, 1, 0] = -1.2  # the left leg lifted from frame 262 on and held: past the lift, the stillest frames
+    lifted = Motion.from_axis_angle(walk().root_positions, axis_angle, fps=FPS)
+    ankles = lifted.joint_positions()[:, [7, 8], 1]
+    standing = np.median(ankles.min(axis=1))
+    assert ankles[275:].max() - standing > 0.2  # the leg is well up where the music ends
+    held = rest(lifted, (60, 270)).joint_positions()[-1, [7, 8], 1]
+    assert np.all(held - standing < 0.03)  # the dancer stops on both feet, not frozen on one leg
 
 
 def test_short_silences_are_danced_through_and_a_song_without_one_is_unchanged():

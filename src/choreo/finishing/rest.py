@@ -4,9 +4,9 @@ The backends dance every frame they are given, so a song that ends on ten second
 got ten seconds of dancing to nothing (15 of the 25 LMMS demo songs end on a second or more of
 it: docs/results.md, "Finishing passes"). Here the dance is re-timed at its quiet ends
 (choreo.music.loudness.audible_span): over ``ease_seconds`` its playback slows smoothly to a stop
-on the stillest pose near the music's end, and holds that pose; before the music it holds the stillest pose near the
-music's start and sets off from it, reaching the dance's own timing as the music comes in. Between
-the two the timing is untouched, so every beat the beat lock placed stays where it is. An end
+on the stillest pose with both feet down near the music's end, and holds that pose; before the
+music it holds such a pose near the music's start and sets off from it, reaching the dance's own
+timing as the music comes in. Between the two the timing is untouched, so every beat the beat lock placed stays where it is. An end
 with a frame a user fixed is left as it is.
 """
 
@@ -19,13 +19,17 @@ import numpy as np
 from ..errors import ParameterError
 from ..motion import Motion
 from ..motion.beats import smoothed_speed
+from ..skeleton import SMPL24
+from .footsteps import LEGS
+
+FOOT_DOWN = 0.03  # metres: an ankle this close to its standing height has its foot on the floor
 
 
 @dataclass(frozen=True, kw_only=True)
 class RestConfig:
     min_silence_seconds: float = 1.0  # a quiet end shorter than this is danced through (a breath, a reverb)
     ease_seconds: float = 1.0  # how long the dancer takes to slow to a stop, or to set off
-    search_seconds: float = 0.5  # the pose held is the stillest one this close to the music's end (or start)
+    search_seconds: float = 0.5  # the pose held: the stillest with both feet down this close to the music's end (or start)
 
     def __post_init__(self):
         if self.min_silence_seconds <= 0 or self.ease_seconds <= 0 or self.search_seconds < 0:
@@ -52,10 +56,11 @@ def rest(motion: Motion, audible: tuple[int, int] | None, fixed: np.ndarray | No
         ease, search = ease * (stop - start) / room, search * (stop - start) / room
     if not (quiet_opening or quiet_ending) or ease < 2:
         return motion
-    speed = smoothed_speed(motion.joint_positions())
+    positions = motion.joint_positions()
+    speed, grounded = smoothed_speed(positions), _both_feet_down(motion, positions)
     source = np.arange(frames, dtype=np.float64)
-    waits = quiet_opening and _retime_opening(source, _stillest(speed, start, search), ease, fixed)
-    rests = quiet_ending and _retime_ending(source, _stillest(speed, stop, search), ease, fixed)
+    waits = quiet_opening and _retime_opening(source, _stillest(speed, grounded, start, search), ease, fixed)
+    rests = quiet_ending and _retime_ending(source, _stillest(speed, grounded, stop, search), ease, fixed)
     if not (waits or rests):
         return motion
     rested = motion.sample_frames(source)
@@ -66,10 +71,23 @@ def rest(motion: Motion, audible: tuple[int, int] | None, fixed: np.ndarray | No
     return rested
 
 
-def _stillest(speed: np.ndarray, frame: int, search: float) -> int:
-    """The frame within ``search`` of ``frame`` where the smoothed joint speed is lowest."""
+def _both_feet_down(motion: Motion, positions: np.ndarray) -> np.ndarray:
+    """(T,) frames where both ankles are within FOOT_DOWN of the dance's usual standing height (the
+    lower ankle's median height); every frame for a skeleton whose legs are not SMPL-24's."""
+    if tuple(motion.skeleton.parents) != tuple(SMPL24.parents):
+        return np.ones(motion.num_frames, bool)
+    ankles = positions[:, [leg[2] for leg in LEGS], 1]
+    return ankles.max(axis=1) - np.median(ankles.min(axis=1)) < FOOT_DOWN
+
+
+def _stillest(speed: np.ndarray, grounded: np.ndarray, frame: int, search: float) -> int:
+    """The frame within ``search`` of ``frame`` where the smoothed joint speed is lowest, among
+    those with both feet down when there are any: a pose to hold, not a step frozen mid-air."""
     low, high = max(0, int(frame - search)), min(len(speed), int(frame + search) + 1)
-    return low + int(np.argmin(speed[low:high])) if high > low else min(frame, len(speed))
+    if high <= low:
+        return min(frame, len(speed))
+    cost = np.where(grounded[low:high], speed[low:high], speed[low:high] + speed.max() + 1.0)
+    return low + int(np.argmin(cost))
 
 
 def _retime_ending(source: np.ndarray, pose: int, ease: float, fixed: np.ndarray) -> bool:
