@@ -16,6 +16,7 @@ from __future__ import annotations
 import torch
 
 from choreo.motion.vector import ROOT_SLICE
+from choreo.threads import in_parallel
 
 FLOOR_CHANNELS = [ROOT_SLICE.start, ROOT_SLICE.start + 2]  # the root's x and z: where on the floor the dancer is
 CACHE_WINDOWS = 96  # about 1.4 MB of cached keys and values per window for the cpu model
@@ -31,7 +32,7 @@ class GuidedDenoiser:
     """
 
     def __init__(self, model, music: torch.Tensor, styles: torch.Tensor, keep_style: torch.Tensor, guidance: float,
-                 chunk_windows: int = 32, cache_windows: int = CACHE_WINDOWS,
+                 chunk_windows: int = 4, cache_windows: int = CACHE_WINDOWS,
                  interval: tuple[int, int] | None = None, style_guidance: float = 1.0,
                  style_interval: tuple[int, int] | None = None, pace: float | None = None,
                  travel_guidance: float = 1.0):
@@ -47,7 +48,8 @@ class GuidedDenoiser:
         styled = guides_style(style_guidance, keep_style)
         self.blocks = ["conditional"] + (["no music"] if guidance != 1.0 else []) + (["no style"] if styled else [])
         self.chunks = [slice(i, min(i + chunk_windows, len(music))) for i in range(0, len(music), chunk_windows)]
-        self.cached = {i: self.condition(part) for i, part in enumerate(self.chunks) if part.stop <= cache_windows}
+        cached = [i for i, part in enumerate(self.chunks) if part.stop <= cache_windows]
+        self.cached = dict(zip(cached, in_parallel(lambda i: self.condition(self.chunks[i]), cached)))
 
     def guided_at(self, t: int) -> bool:
         return self.guidance != 1.0 and _inside(self.interval, t)
@@ -75,25 +77,26 @@ class GuidedDenoiser:
 
     @torch.no_grad()
     def __call__(self, x_t: torch.Tensor, t: int) -> torch.Tensor:
-        """Guided x0 predictions (N, W, D) for noisy windows (N, W, D) at diffusion step t."""
-        active = self.blocks_at(t)
-        predictions = []
-        for index, part in enumerate(self.chunks):
-            conditioning = self.cached.get(index) or self.condition(part)
-            x = x_t[part]
-            count = len(x)
-            rows = torch.cat([torch.arange(count) + self.blocks.index(b) * count for b in active])
-            steps = torch.full((count * len(active),), t, dtype=torch.long)
-            outputs = dict(zip(active, self.model.denoise(x.repeat(len(active), 1, 1), steps,
-                                                          conditioning.rows(rows)).chunk(len(active))))
-            guided = torch.zeros_like(outputs["conditional"])
-            if "no music" in outputs:
-                guided += (self.guidance - 1) * (outputs["conditional"] - outputs["no music"])
-            if "no style" in outputs:
-                guided += (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
-            guided[..., FLOOR_CHANNELS] *= self.travel_guidance
-            predictions.append(outputs["conditional"] + guided)
-        return torch.cat(predictions)
+        """Guided x0 predictions (N, W, D) for noisy windows (N, W, D) at diffusion step t: the
+        chunks side by side on the chosen threads (choreo.threads)."""
+        return torch.cat(in_parallel(lambda index: self.guided_chunk(x_t, t, index), range(len(self.chunks))))
+
+    def guided_chunk(self, x_t: torch.Tensor, t: int, index: int) -> torch.Tensor:
+        active, part = self.blocks_at(t), self.chunks[index]
+        conditioning = self.cached.get(index) or self.condition(part)
+        x = x_t[part]
+        count = len(x)
+        rows = torch.cat([torch.arange(count) + self.blocks.index(b) * count for b in active])
+        steps = torch.full((count * len(active),), t, dtype=torch.long)
+        outputs = dict(zip(active, self.model.denoise(x.repeat(len(active), 1, 1), steps,
+                                                      conditioning.rows(rows)).chunk(len(active))))
+        guided = torch.zeros_like(outputs["conditional"])
+        if "no music" in outputs:
+            guided += (self.guidance - 1) * (outputs["conditional"] - outputs["no music"])
+        if "no style" in outputs:
+            guided += (self.style_guidance - 1) * (outputs["conditional"] - outputs["no style"])
+        guided[..., FLOOR_CHANNELS] *= self.travel_guidance
+        return outputs["conditional"] + guided
 
 
 def guides_style(style_guidance: float, keep_style) -> bool:

@@ -20,6 +20,7 @@ from .config import CONTACT_SOURCES, DiffusionConfig
 from .normalizer import Normalizer
 
 CONTACT_THRESHOLD = 0.95  # predicted contact above this pins the foot (EDGE)
+LEG_POINTS = (4, 5, 7, 8, 10, 11)  # knees, ankles, feet: what a step moves
 FPS = 30.0  # foot speeds in the stepping term are in m/s at the training frame rate
 
 
@@ -32,12 +33,13 @@ class LossTerms:
     stepping: torch.Tensor  # the feet's world speeds against the data's, in (m/s)^2
     root_speed: torch.Tensor  # the root's horizontal speed against the data's, in (m/s)^2
     pace: torch.Tensor  # each window's pace against the data's, in (m/s)^2
+    legs: torch.Tensor  # knees, ankles and feet around the pelvis: positions in m^2 plus speeds in (m/s)^2
 
     def total(self, config: DiffusionConfig) -> torch.Tensor:
         total = (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
                  + config.joint_weight * self.joints + config.foot_weight * self.foot)
         for weight, term in ((config.stepping_weight, self.stepping), (config.root_speed_weight, self.root_speed),
-                             (config.pace_weight, self.pace)):
+                             (config.pace_weight, self.pace), (config.legs_weight, self.legs)):
             if weight:  # the terms most runs leave off
                 total = total + weight * term
         return total
@@ -61,7 +63,7 @@ def leg_channels(frame_dim: int) -> torch.Tensor:
 
 def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: Normalizer,
                      weights: torch.Tensor | None = None, contact_source: str = "predicted",
-                     leg_weight: float = 1.0) -> LossTerms:
+                     leg_weight: float = 1.0, clean_share: torch.Tensor | None = None) -> LossTerms:
     """predicted and target x0 in normalised space, (B, T, 151); ``weights`` (B,) weigh each
     window's terms (min-SNR weighting: ``snr_weights``), uniform when None; ``contact_source``:
     which contact labels pin the feet in the foot term (CONTACT_SOURCES); ``leg_weight``: the
@@ -83,9 +85,37 @@ def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: 
     stepping = _per_window((feet_velocity - foot_velocity(target_joints)).mul(FPS).pow(2).sum(-1))
     root_speed = _per_window((horizontal_root_speed(predicted_motion) - horizontal_root_speed(target_motion)).pow(2))
     pace = (window_pace(predicted_motion) - window_pace(target_motion)).pow(2)
+    legs = legs_error(predicted_motion, predicted_joints, target_motion, target_joints)
+    if clean_share is not None:
+        legs = legs * clean_share
     weigh = (lambda term: term.mean()) if weights is None else (lambda term: (term * weights).mean())  # noqa: E731
     return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping), weigh(root_speed),
-                     weigh(pace))
+                     weigh(pace), weigh(legs))
+
+
+def legs_around_pelvis(vectors: torch.Tensor, joints: torch.Tensor) -> torch.Tensor:
+    """(B, T, 151) de-normalised frame vectors and their (B, T, 24, 3) joints -> (B, T, 6, 3) knees,
+    ankles and feet relative to the pelvis, turned so the pelvis faces +Z: the steps themselves,
+    whatever way the dancer faces and however the root travels."""
+    pelvis = rot6d_to_matrix(vectors[..., ROTATION_SLICE.start: ROTATION_SLICE.start + 6])
+    heading = F.normalize(pelvis[..., [0, 2], 2], dim=-1, eps=1e-6)  # the pelvis's +Z on the floor: (sin, cos) of its yaw
+    sin, cos = heading[..., None, 0], heading[..., None, 1]
+    around = joints[:, :, list(LEG_POINTS)] - joints[:, :, :1]
+    x, y, z = around.unbind(-1)
+    return torch.stack((cos * x - sin * z, y, sin * x + cos * z), -1)
+
+
+def legs_error(predicted_motion: torch.Tensor, predicted_joints: torch.Tensor, target_motion: torch.Tensor,
+               target_joints: torch.Tensor) -> torch.Tensor:
+    """(B,) the legs around the pelvis against the data's: squared position error in m^2 plus squared
+    speed error in (m/s)^2. Why: the x0 term weighs a toe's rotation like a hip's and the joints term
+    is dominated by the root's travel, so neither sees a foot that rides on the body instead of
+    stepping (docs/sgmd.md, "Legs")."""
+    predicted = legs_around_pelvis(predicted_motion, predicted_joints)
+    target = legs_around_pelvis(target_motion, target_joints)
+    positions = _per_window((predicted - target).pow(2))
+    speeds = _per_window(((predicted[:, 1:] - predicted[:, :-1]) - (target[:, 1:] - target[:, :-1])).mul(FPS).pow(2))
+    return positions + speeds
 
 
 def horizontal_root_speed(vectors: torch.Tensor) -> torch.Tensor:

@@ -41,7 +41,7 @@ class SamplingOptions:
     sampler: str = option("ddim", f"Sampler: {' or '.join(SAMPLERS)} (ddpm: the full chain, slow).")
     eta: float = 1.0  # DDIM stochasticity: 1 as EDGE samples, 0 deterministic
     seed: int = 0
-    chunk_windows: int = 32  # windows per network call
+    chunk_windows: int = 4  # windows per network call: the pieces threads share (choreo.threads)
     block_windows: int = 48  # windows denoised together (2 min of song); longer songs go block by block
     # Noise levels t/T where music guidance applies (elsewhere w = 1); None: STYLED_MUSIC_INTERVAL when
     # the style is guided too, every level otherwise.
@@ -162,6 +162,8 @@ class TrainOptions:
                                                    "direction-free, in (m/s)^2.")
     pace_weight: float | None = option(None, "Weight of each window's pace (its root's floor path over a second) "
                                              "against the data's, in (m/s)^2.")
+    legs_weight: float | None = option(None, "Weight of the knees, ankles and feet around the pelvis against the data's "
+                                             "(positions in m^2 + speeds in (m/s)^2), by each window's signal share.")
     init_from: str | None = option(None, "Fine-tune from this training state (same network; its step count carries on).",
                                    existing_file=True)
     hold_out_validation: bool = option(False, "On M2D: train without the validation clips (docs/m2d.md) and "

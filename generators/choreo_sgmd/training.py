@@ -102,8 +102,9 @@ class Trainer:
         predicted = model(x_t, t, music, style, keep_music=keep_music, keep_style=keep_style, pace=pace)
         gamma = self.diffusion_config.snr_gamma
         weights = snr_weights(self.schedule.alpha_bar(t).to(x0.dtype), gamma) if gamma else None
+        clean_share = self.schedule.alpha_bar(t).to(x0.dtype) if self.diffusion_config.legs_weight else None
         terms = diffusion_losses(predicted, x0, self.normalizer, weights, self.diffusion_config.contact_source,
-                                 self.diffusion_config.leg_weight)
+                                 self.diffusion_config.leg_weight, clean_share)
         return terms.total(self.diffusion_config)
 
     def train_step(self) -> float:

@@ -1,4 +1,4 @@
-"""How many threads torch samples with: the CPUs this process may use, less those other work keeps busy.
+"""How many threads a dance is computed on: the CPUs this process may use, less those other work keeps busy.
 
 torch's default is one thread per core of the machine. Beside other jobs (``xargs -P``, GNU
 parallel, a CI matrix on one runner) its threads then spin against each other's: two `choreo
@@ -9,6 +9,12 @@ mask and its cgroup's CPU quota) less the tasks other processes have running at 
 (the kernel's instantaneous count in /proc/loadavg). ``--threads N`` and ``OMP_NUM_THREADS``
 win over the guess, up to the CPUs allowed: torch and libgomp start as many threads as they are
 told, and 99,999 of them end the process with a segmentation fault and no message.
+
+The count never changes a dance. A matrix product torch splits over two threads sums in another
+order than one thread does, and the difference grows through a diffusion chain (an 8 s dance
+differed from its 79th frame on between ``--threads 1`` and ``2``). So torch always computes
+with one thread, and the threads share the work by pieces fixed in advance (``in_parallel``:
+the sampler's chunks of windows), each piece computed the same way whatever the count.
 """
 
 from __future__ import annotations
@@ -16,12 +22,16 @@ from __future__ import annotations
 import math
 import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Callable, Iterable, TypeVar
 
 LOADAVG = Path("/proc/loadavg")
 CGROUP_V2_MAX = Path("/sys/fs/cgroup/cpu.max")
 CGROUP_V1 = Path("/sys/fs/cgroup/cpu")
 SAMPLES, SAMPLE_INTERVAL = 5, 0.004  # seconds: the runnable count is read a few times, its median kept
+T, R = TypeVar("T"), TypeVar("R")
+_workers = 1  # pieces in_parallel computes at once: set by use_threads
 
 
 def allowed_cpus() -> int:
@@ -111,10 +121,31 @@ def _is_count(text: str) -> bool:
 
 
 def use_threads(requested: int | None = None) -> int:
-    """Set torch's intra-op thread count for the work about to start; returns it."""
+    """Choose the thread count for the work about to start (``in_parallel`` uses it) and keep torch's
+    own at one, so the count cannot change a result; returns it."""
     import torch
 
-    threads = choose_threads(requested)
-    if torch.get_num_threads() != threads:
-        torch.set_num_threads(threads)
-    return threads
+    global _workers
+    _workers = choose_threads(requested)
+    if torch.get_num_threads() != 1:
+        torch.set_num_threads(1)
+    return _workers
+
+
+def in_parallel(function: Callable[[T], R], pieces: Iterable[T]) -> list[R]:
+    """``[function(piece) for piece in pieces]``, on as many threads as ``use_threads`` chose. Each
+    piece is computed whole by one thread, so the results do not depend on the count; torch's
+    gradient mode (thread-local) is carried into the workers."""
+    import torch
+
+    pieces = list(pieces)
+    if _workers == 1 or len(pieces) < 2:
+        return [function(piece) for piece in pieces]
+    grad = torch.is_grad_enabled()
+
+    def work(piece: T) -> R:
+        with torch.set_grad_enabled(grad):
+            return function(piece)
+
+    with ThreadPoolExecutor(min(_workers, len(pieces))) as pool:
+        return list(pool.map(work, pieces))

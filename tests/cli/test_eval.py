@@ -81,8 +81,8 @@ def test_eval_errors_are_one_line(tmp_path, capsys):
         assert len(lines) == 1 and lines[0].startswith("choreo: error:"), err
 
 
-@pytest.mark.parametrize("fps, words", [("inf", "--fps takes a finite number"), ("1e308", "--fps must be 1 to 1000"),
-                                        ("0", "--fps must be 1 to 1000")])
+@pytest.mark.parametrize("fps, words", [("inf", "--fps takes a finite number"), ("1e308", "--fps must be 10 to 240"), ("1000", "--fps must be 10 to 240"),
+                                        ("0", "--fps must be 10 to 240"), ("5", "--fps must be 10 to 240")])
 def test_eval_fps_is_bounded_before_any_file_is_read(tmp_path, capsys, fps, words):
     """Issue 48, item 10: --fps inf overflowed the resampling (exit 70)."""
     code = main(["eval", str(tmp_path / "nothing"), "--gt", str(tmp_path / "nothing"), "--fps", fps])

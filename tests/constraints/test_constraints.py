@@ -197,11 +197,65 @@ def test_controllable_commands_keep_what_they_are_given(tiny_generator, song_fil
     assert np.abs(read_motion(tmp_path / "g.npz").joint_positions() - given.joint_positions()).max() < 1e-3
 
 
+def smooth_dance(seconds=6.0, fps=60.0):
+    """A dance slow enough that a resample round trip changes it by well under a centimetre."""
+    t = np.arange(round(seconds * fps))[:, None, None] / fps
+    axis_angle = 0.3 * np.sin(2 * np.pi * 0.5 * t + np.arange(24)[None, :, None] + np.arange(3)) * np.ones((1, 24, 3))
+    root = np.concatenate([0.2 * np.sin(t[:, 0]), 0.95 + 0 * t[:, 0], 0.1 * t[:, 0]], axis=1)
+    return Motion.from_axis_angle(root, axis_angle, fps=fps)
+
+
+def test_frames_count_in_the_given_motion_and_the_dance_keeps_its_rate(tiny_generator, song_file, tmp_path, capsys):
+    """Issue 59, item 14: --frames counted at 30 fps whatever the motion's rate, and a 60 fps motion
+    came back at 30 fps."""
+    from choreo.formats import read_motion
+
+    common = ["--checkpoint", tiny_generator.checkpoint, "--steps", "2"]
+    given = smooth_dance(fps=60.0)
+    write_motion(given, tmp_path / "given.npz")
+    code, err = run_cli(capsys, "inpaint", song_file, "--motion", tmp_path / "given.npz", "--frames", "120:240",
+                        "--joints", "upper", "-o", tmp_path / "out.npz", *common)
+    assert code == 0, err
+    out = read_motion(tmp_path / "out.npz")
+    assert out.fps == 60.0 and abs(out.num_frames - given.num_frames) <= 1
+    moved = np.abs(out.joint_positions() - given.joint_positions()[: out.num_frames]).max(axis=(1, 2))
+    upper = np.abs(out.joint_positions()[:, UPPER_BODY_JOINTS]
+                   - given.joint_positions()[: out.num_frames, UPPER_BODY_JOINTS]).max(axis=(1, 2))
+    assert moved[:110].max() < 0.01 and moved[250:].max() < 0.01  # kept: 0-2 s and 4-6 s (frames of the 60 fps file)
+    assert upper[130:230].max() > 0.05  # danced afresh: 2-4 s
+    lower = np.array(LOWER_BODY_JOINTS)
+    assert np.abs(out.joint_positions()[:, lower] - given.joint_positions()[: out.num_frames, lower]).max() < 0.01
+
+    code, err = run_cli(capsys, "inpaint", song_file, "--motion", tmp_path / "given.npz", "--frames", "120:240",
+                        "-o", tmp_path / "at30.npz", "--fps", "30", *common)
+    assert code == 0, err
+    assert read_motion(tmp_path / "at30.npz").fps == 30.0  # --fps wins
+
+    code, err = run_cli(capsys, "generate", song_file, "--seed-motion", tmp_path / "given.npz", "-o",
+                        tmp_path / "continued.npz", *common)
+    assert code == 0, err
+    assert read_motion(tmp_path / "continued.npz").fps == 60.0
+
+
+def test_inpainting_frames_are_the_motions_own():
+    from types import SimpleNamespace
+
+    from choreo.constraints.recipes import in_song_frames
+
+    music = SimpleNamespace(fps=30.0, num_frames=300, duration=10.0)
+    assert in_song_frames(slice(120, 240), dance(600, fps=60.0), music) == slice(60, 120)
+    assert in_song_frames(slice(120, 240), dance(300, fps=30.0), music) == slice(120, 240)
+    assert in_song_frames(slice(1, 2), dance(600, fps=240.0), music) == slice(0, 1)  # never empty
+    with pytest.raises(ParameterError, match="past the song's end"):
+        in_song_frames(slice(400, 500), dance(600, fps=30.0), music)
+
+
 @pytest.mark.parametrize("command, extra, message", [
     ("inpaint", ["--motion", "{given}", "--frames", "100:900"], "outside"),
     ("inpaint", ["--motion", "{given}", "--joints", "wings"], "unknown joint"),
     ("inbetween", [], "at least one of"),
-    ("inbetween", ["--key", "60=pose"], "past the song's end"),
+    ("inbetween", ["--key", "60={given}"], "past the song's end"),
+    ("inbetween", ["--key", "1=missing.bvh"], "missing.bvh"),
     ("trajectory", ["--path", "{empty}"], "empty"),
     ("trajectory", ["--path", "{short}"], "at least two points"),
     ("inpaint", ["--motion", "{nan}"], "NaN"),

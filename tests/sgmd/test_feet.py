@@ -97,7 +97,36 @@ def test_leg_weight_scales_only_the_legs_rotation_channels():
         assert float(weighted) == pytest.approx(factor * float(plain))
 
 
-@pytest.mark.parametrize("bad", [{"contact_source": "model"}, {"stepping_weight": -1.0}, {"leg_weight": 0.0}])
+def test_legs_term_sees_steps_around_the_pelvis_not_the_travel_or_the_facing():
+    from choreo_sgmd.losses import legs_error
+
+    frames = 30
+    t = np.arange(frames)[:, None] / 30
+    still = np.zeros((frames, 24, 3))
+    stepping = still.copy()
+    stepping[:, 1, 0] = 0.4 * np.sin(2 * np.pi * t[:, 0])  # the left hip swings the leg forward and back
+    root = np.zeros((frames, 3)) + [0, 0.9, 0]
+
+    def vectors(axis_angle, root_positions, yaw=0.0):
+        axis_angle = axis_angle.copy()
+        axis_angle[:, 0, 1] += yaw
+        motion = Motion.from_axis_angle(root_positions, axis_angle)
+        return torch.from_numpy(motion_to_vector(motion))[None].float()
+
+    def term(a, b):
+        from choreo_sgmd.losses import joint_positions
+
+        return float(legs_error(a, joint_positions(a), b, joint_positions(b))[0])
+
+    target = vectors(stepping, root)
+    assert term(target, target) == pytest.approx(0.0, abs=1e-9)
+    travelling = root + t * [1.0, 0, 0]  # the whole dancer glides 1 m/s: the legs around the pelvis are the same
+    assert term(vectors(stepping, travelling, yaw=1.0), target) == pytest.approx(0.0, abs=1e-6)
+    assert term(vectors(still, root), target) > 0.05  # a leg that stays put while the data's steps
+
+
+@pytest.mark.parametrize("bad", [{"contact_source": "model"}, {"stepping_weight": -1.0}, {"leg_weight": 0.0},
+                                 {"legs_weight": -1.0}])
 def test_bad_foot_settings_are_refused(bad):
     with pytest.raises(ValueError):
         DiffusionConfig(**bad)

@@ -99,7 +99,7 @@ def convert(
     source: Path = typer.Argument(..., help="Input motion: .bvh, .npz (AIST++ keys), .pkl (AIST++), .json, .glb; - reads stdin."),
     target: str = typer.Argument(..., help="Output path, or - for stdout (needs --format)."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
-    fps: Optional[float] = typer.Option(None, parser=Number("--fps"), help="Resample to this frame rate."),
+    fps: Optional[float] = typer.Option(None, parser=Number("--fps"), help="Resample to this frame rate (10 to 240)."),
     rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo."),
     in_place: bool = IN_PLACE, root_motion: bool = ROOT_MOTION,
 ) -> None:
@@ -114,10 +114,10 @@ def convert(
       choreo convert dance.bvh dance.fbx --rig mixamo --root-motion  # Unreal's root motion
     """
     from ..formats import check_output_format, read_motion, write_motion
-    from ..motion.delivery import check_travel, delivered
-    from ..motion.motion import MAX_FPS, MIN_FPS
+    from ..motion.delivery import check_fps, check_travel, delivered
 
-    fps = Number("--fps", MIN_FPS, MAX_FPS)(fps)  # before resampling allocates the frames (inf, 1e6)
+    if fps is not None:
+        check_fps(fps)  # the range every command takes, before resampling allocates the frames
     check_travel(in_place, root_motion)
     check_output_format(target, format, rig, root_motion)  # a bad target or rig refused before reading anything
     motion = read_motion(_require_file(source))

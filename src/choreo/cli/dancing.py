@@ -91,10 +91,18 @@ class DanceFlags:
             check_fps(self.fps)
         check_travel(self.in_place, self.root_motion)
 
-    def outputs(self, paths: list[str], preview: bool = False, format: bool = True) -> "Outputs":
-        """Where and how a song's dance is written (``format``: --format names one file's format)."""
+    def outputs(self, paths: list[str], preview: bool = False, format: bool = True, fps: float | None = None) -> "Outputs":
+        """Where and how a song's dance is written (``format``: --format names one file's format;
+        ``fps``: the rate of the motion the dance continues or edits, which --fps overrides)."""
+        from ..errors import ParameterError
+        from ..motion.delivery import MAX_DELIVERY_FPS, MIN_DELIVERY_FPS
+
+        if self.fps is None and fps is not None and not MIN_DELIVERY_FPS <= fps <= MAX_DELIVERY_FPS:
+            raise ParameterError(f"the given motion is at {fps:g} fps: give --fps ({MIN_DELIVERY_FPS:g} to "
+                                 f"{MAX_DELIVERY_FPS:g}) for the dance")
         return Outputs(paths=paths, format=self.format if format else None, rig=self.rig, preview=preview,
-                       fps=self.fps, in_place=self.in_place, root_motion=self.root_motion)
+                       fps=self.fps if self.fps is not None else fps, in_place=self.in_place,
+                       root_motion=self.root_motion)
 
     def request(self, constrained: bool = False, loop: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not

@@ -52,7 +52,7 @@ def evaluate(
     generated: Path = typer.Argument(..., help="Generated motion: a file or a folder of .bvh/.npz/.pkl/.json/.npy."),
     gt: Path = typer.Option(..., "--gt", help="Ground-truth motion: a file or a folder, same formats."),
     music: Optional[Path] = typer.Option(None, help="Folder of songs named like the motions (default: beside them)."),
-    fps: float = typer.Option(30.0, parser=Number("--fps"), help="Evaluation frame rate; other files are resampled, .npy are taken as this."),
+    fps: float = typer.Option(30.0, parser=Number("--fps"), help="Evaluation frame rate (10 to 240); other files are resampled, .npy are taken as this."),
     up: str = typer.Option("y", help="Up axis of .npy joint arrays and all inputs: y (ours, AIST++) or z (EDGE)."),
     json_path: Optional[Path] = typer.Option(None, "--json", help="Write every figure and per-file scores here."),
 ) -> None:
@@ -69,12 +69,12 @@ def evaluate(
     from ..metrics import MetricWarning
     from ..metrics import evaluate as run_evaluation
     from ..metrics.evaluate import collect_motion_files
-    from ..motion.motion import MAX_FPS, MIN_FPS
+    from ..motion.delivery import check_fps
     from .text import markup
 
     if up not in ("y", "z"):
         raise ParameterError(f"--up must be y or z, got {up!r}")
-    Number("--fps", MIN_FPS, MAX_FPS)(fps)  # inf overflowed the resampling (exit 70)
+    check_fps(fps)  # the range every command takes (inf overflowed the resampling: exit 70)
     if music is not None and not music.is_dir():
         raise ParameterError(f"--music {music} is not a folder")
     generated_files, truth_files = collect_motion_files(generated), collect_motion_files(gt)

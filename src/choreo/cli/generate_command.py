@@ -7,6 +7,7 @@ request, to :func:`~choreo.cli.dancing.dance_one`; the options they share are de
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 from typing import List, Optional
 
@@ -23,7 +24,8 @@ def generate(
     output: Optional[List[str]] = typer.Option(
         None, "-o", "--output", help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several."),
     out_dir: Optional[Path] = typer.Option(None, help="Folder for one dance per song, named after the song (default: the current folder)."),
-    seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it."),
+    seed_motion: Optional[Path] = typer.Option(None, help="Motion file whose frames open the dance; the rest continues it, at the motion's "
+                                           "frame rate unless --fps says otherwise."),
     loop: bool = LOOP,
     json_summary: bool = typer.Option(False, "--json", help="Print a machine-readable summary of every song on stdout."),
     preview: bool = PREVIEW,
@@ -81,21 +83,19 @@ def generate(
     if shard is not None:
         songs = Shard.parse(shard).select(songs)
 
+    opening = read_input_motion(seed_motion) if seed_motion is not None else None
+    fps = opening.fps if opening is not None else None  # a dance that continues a motion keeps its rate
+
     def outputs_for(song: Path):
         if output is not None:
-            return dance.outputs(list(output), preview)
-        return dance.outputs([str(out_dir / f"{song.stem}.{ext}") for ext in formats], preview, format=False)
+            return dance.outputs(list(output), preview, fps=fps)
+        return dance.outputs([str(out_dir / f"{song.stem}.{ext}") for ext in formats], preview, format=False, fps=fps)
 
     def done_before(song: Path) -> bool:
         files = outputs_for(song).paths
         return already_written(files + [str(Path(files[0]).with_suffix(".mp4"))] if preview else files)
 
-    def constraints(music):
-        from ..constraints import Constraints, as_smpl
-        from ..formats import read_motion
-
-        opening = as_smpl(read_motion(seed_motion), music.fps)
-        return Constraints.none(music.num_frames, music.fps).fix_motion(opening.slice_frames(0, music.num_frames))
+    from ..constraints import seed_motion as opening_with
 
     request = dance.request(constrained=seed_motion is not None, loop=loop)
     summaries, failed = [], 0
@@ -104,7 +104,8 @@ def generate(
             summaries.append({"song": str(song), "ok": True, "skipped": True, "outputs": outputs_for(song).paths})
             continue
         try:
-            summaries.append(dance_one(request, song, outputs_for(song), constraints if seed_motion else None))
+            summaries.append(dance_one(request, song, outputs_for(song),
+                                       partial(opening_with, motion=opening) if opening is not None else None))
         except Exception as error:  # noqa: BLE001 - in a batch, one song's failure, even a bug, must not stop the rest
             if len(songs) == 1 or isinstance(error, KeyboardInterrupt):
                 raise
@@ -133,34 +134,23 @@ def inbetween(
       choreo inbetween song.mp3 --start a.bvh --end b.bvh -o dance.bvh
       choreo inbetween song.mp3 --start a.bvh@-1 --key 4.0=pose.bvh --key 8.5=take2.npz@30 -o dance.bvh --style rumba
     """
+    from ..constraints import between_poses, parse_time_key, read_pose
     from ..errors import ParameterError
 
     if start is None and end is None and not key:
         raise ParameterError("give at least one of --start, --end or --key")
-
-    def constraints(music):
-        from ..constraints import Constraints, parse_time_key, read_pose
-
-        fixed = Constraints.none(music.num_frames, music.fps)
-        keys = [(0.0, start)] if start else []
-        keys += [parse_time_key(k) for k in key]
-        for seconds, spec in keys:
-            frame = round(seconds * music.fps)
-            if frame >= music.num_frames:
-                raise ParameterError(f"keyframe at {seconds:g} s is past the song's end ({music.duration:.1f} s)")
-            fixed.fix_motion(read_pose(spec), at=frame)
-        if end:
-            fixed.fix_motion(read_pose(end), at=music.num_frames - 1)
-        return fixed
-
-    dance_one(dance.request(constrained=True), song, dance.outputs(output), constraints)
+    keys = [(seconds, read_pose(spec)) for seconds, spec in map(parse_time_key, key)]
+    poses = partial(between_poses, start=read_pose(start) if start else None, end=read_pose(end) if end else None,
+                    keys=keys)
+    dance_one(dance.request(constrained=True), song, dance.outputs(output), poses)
 
 
 @dancing_command("sgmd")
 def inpaint(
     song: Path = SONG, output: List[str] = OUTPUT,
     motion: Path = typer.Option(..., help="The dance to edit (any motion file, e.g. one this tool made)."),
-    frames: Optional[str] = typer.Option(None, help="Frames to regenerate, START:END (end exclusive); default all."),
+    frames: Optional[str] = typer.Option(None, help="Frames to regenerate, START:END in the motion's own frames (end exclusive); default all. "
+                                         "The dance is written at the motion's frame rate unless --fps says otherwise."),
     joints: str = typer.Option("all", help="Joints to regenerate: upper, lower, all, or names/indices like l_wrist,21."),
     dance: DanceFlags = None,
 ) -> None:
@@ -170,22 +160,12 @@ def inpaint(
       choreo inpaint song.mp3 --motion dance.bvh --frames 60:120 -o fixed.bvh
       choreo inpaint song.mp3 --motion dance.bvh --joints upper -o new_arms.bvh --style "sharp, energetic arms"
     """
-    from ..errors import ParameterError
+    from ..constraints import inpainting, parse_frame_range, parse_joints
 
-    def constraints(music):
-        from ..constraints import Constraints, as_smpl, parse_frame_range, parse_joints
-        from ..formats import read_motion
-
-        given = as_smpl(read_motion(motion), music.fps)
-        fixed = Constraints.none(music.num_frames, music.fps).fix_motion(given.slice_frames(0, music.num_frames))
-        region = parse_frame_range(frames, music.num_frames) if frames else slice(0, music.num_frames)
-        chosen = parse_joints(joints)
-        fixed.free(region, chosen, root=0 in chosen)
-        if fixed.is_empty:
-            raise ParameterError("nothing of the dance would be kept: use choreo generate instead")
-        return fixed
-
-    dance_one(dance.request(constrained=True), song, dance.outputs(output), constraints)
+    given = read_input_motion(motion)
+    region = parse_frame_range(frames, given.num_frames) if frames else None
+    edit = partial(inpainting, motion=given, frames=region, joints=parse_joints(joints))
+    dance_one(dance.request(constrained=True), song, dance.outputs(output, fps=given.fps), edit)
 
 
 @dancing_command("sgmd")
@@ -200,10 +180,13 @@ def trajectory(
       choreo trajectory song.mp3 --path circle.csv -o dance.bvh --style waltz
       choreo trajectory song.mp3 --path other_dance.bvh -o dance.bvh
     """
-    def constraints(music):
-        from ..constraints import Constraints, path_to_frames, read_root_path
+    from ..constraints import along_path
 
-        xz, heights = path_to_frames(*read_root_path(path), music.num_frames)
-        return Constraints.none(music.num_frames, music.fps).fix_root_path(xz, heights)
+    dance_one(dance.request(constrained=True), song, dance.outputs(output), partial(along_path, path=path))
 
-    dance_one(dance.request(constrained=True), song, dance.outputs(output), constraints)
+
+def read_input_motion(path: Path):
+    """The motion a dance continues or edits, read before any work (a bad file costs nothing)."""
+    from ..formats import read_motion
+
+    return read_motion(path)
