@@ -83,8 +83,6 @@ def generate(
     if shard is not None:
         songs = Shard.parse(shard).select(songs)
 
-    opening = read_input_motion(seed_motion) if seed_motion is not None else None
-    fps = opening.fps if opening is not None else None  # a dance that continues a motion keeps its rate
 
     def outputs_for(song: Path):
         if output is not None:
@@ -98,6 +96,8 @@ def generate(
     from ..constraints import seed_motion as opening_with
 
     request = dance.request(constrained=seed_motion is not None, loop=loop)
+    opening = read_input_motion(seed_motion) if seed_motion is not None else None
+    fps = opening.fps if opening is not None else None  # a dance that continues a motion keeps its rate
     summaries, failed = [], 0
     for song in songs:
         if skip_existing and done_before(song):
@@ -139,10 +139,11 @@ def inbetween(
 
     if start is None and end is None and not key:
         raise ParameterError("give at least one of --start, --end or --key")
+    request = dance.request(constrained=True)
     keys = [(seconds, read_pose(spec)) for seconds, spec in map(parse_time_key, key)]
     poses = partial(between_poses, start=read_pose(start) if start else None, end=read_pose(end) if end else None,
                     keys=keys)
-    dance_one(dance.request(constrained=True), song, dance.outputs(output), poses)
+    dance_one(request, song, dance.outputs(output), poses)
 
 
 @dancing_command("sgmd")
@@ -162,10 +163,11 @@ def inpaint(
     """
     from ..constraints import inpainting, parse_frame_range, parse_joints
 
+    request = dance.request(constrained=True)
     given = read_input_motion(motion)
     region = parse_frame_range(frames, given.num_frames) if frames else None
     edit = partial(inpainting, motion=given, frames=region, joints=parse_joints(joints))
-    dance_one(dance.request(constrained=True), song, dance.outputs(output, fps=given.fps), edit)
+    dance_one(request, song, dance.outputs(output, fps=given.fps), edit)
 
 
 @dancing_command("sgmd")
