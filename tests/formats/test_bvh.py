@@ -656,3 +656,30 @@ def test_a_huge_token_in_the_hierarchy_is_cut_in_the_refusal(dance, old, new, me
     with pytest.raises(MotionFormatError) as raised:
         bvh.parse_bvh(smpl_text(dance).replace(old, new, 1), "x.bvh")
     assert str(raised.value).endswith(message) and len(str(raised.value)) < 120
+
+
+def with_positions_on_l_hip(text: str) -> str:
+    """``text`` (choreo's SMPL-24 BVH) with position channels on l_hip, the first joint below the
+    pelvis: its three values come after the pelvis's six in every frame row."""
+    head, motion = text.split("MOTION\n")
+    head = head.replace("CHANNELS 3", "CHANNELS 6 Xposition Yposition Zposition", 1)
+    lines = motion.splitlines()
+    rows = [" ".join(line.split()[:6] + ["0.1", "0.2", "0.3"] + line.split()[6:]) for line in lines[2:]]
+    return head + "MOTION\n" + "\n".join(lines[:2] + rows) + "\n"
+
+
+@pytest.mark.hardening
+def test_position_channels_below_the_root_are_one_note_in_choreos_words(tmp_path, dance, capsys):
+    """Round five, item 10: position channels on a joint other than the root printed Python's raw
+    UserWarning, its source file, line number and the source line; now one ``note:`` line."""
+    from tests.helpers import run_cli
+
+    path = tmp_path / "pos.bvh"
+    path.write_text(with_positions_on_l_hip(smpl_text(dance)))
+    code, _, err = run_cli(capsys, "convert", path, tmp_path / "out.npz")
+    assert code == 0, err
+    lines = err.splitlines()
+    assert lines[0] == "note: BVH position channels on non-root joints are ignored (bone offsets are used)"
+    assert len(lines) == 2 and lines[1].startswith("wrote ") and "Warning" not in err and "bvh.py" not in err
+    with pytest.warns(UserWarning):  # from Python, still a warning
+        read_motion(path)

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MotionFormatError
+from ..errors import ChoreoNote, MotionFormatError
 from ..motion import Motion, source_name
 from ..motion.delivery import with_root_bone
 from ..motion.motion import frame_chunks
@@ -404,7 +404,8 @@ def _local_rotations(data: BvhData, warn: bool = True, translated=()) -> tuple[n
         elif position_channels and j not in translated:
             ignored_positions = True
     if ignored_positions and warn:
-        warnings.warn("BVH position channels on non-root joints are ignored (bone offsets are used)")
+        warnings.warn("BVH position channels on non-root joints are ignored (bone offsets are used)", ChoreoNote,
+                      stacklevel=2)
     return rotmats, root
 
 
