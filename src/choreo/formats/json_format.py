@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
+from ..motion.motion import file_metadata
 from ..skeleton import SMPL24, Skeleton
 from . import json_arrays
 
@@ -43,7 +44,8 @@ def write_json(motion: Motion, handle) -> None:
 
 def _metadata(document: dict, path) -> dict:
     """The file's metadata, its source reduced to a file name (older files hold absolute paths)."""
-    metadata = dict(document.get("metadata") or {})
+    stored = document.get("metadata") or {}
+    metadata = file_metadata(dict(stored))  # a list of pairs too, as before
     metadata["source"] = source_name(str(metadata.get("source") or path))
     return metadata
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import MotionFormatError
 from ..motion import Motion, source_name
+from ..motion.motion import file_metadata
 from ..skeleton import SMPL24
 from .safe_arrays import load_npz
 from .smpl_params import first_number, motion_to_smpl_params, smpl_params_to_motion
@@ -47,7 +48,7 @@ def read_npz(path) -> Motion:
         try:
             metadata = json.loads(str(data["metadata"]))
             if isinstance(metadata, dict):
-                motion.metadata = {**metadata, "source": source_name(path)}
+                motion.metadata = {**file_metadata(metadata), "source": source_name(path)}
         except (ValueError, RecursionError):  # metadata is optional: unreadable JSON is ignored
             pass
     return motion
