@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
+from ..fileio import json_safe
 from ..motion import Motion, source_name
 from ..motion.delivery import ROOT_BONE, with_root_bone
 from ..motion.motion import file_metadata
@@ -93,7 +94,7 @@ def write_glb(motion: Motion, handle, root_motion: bool = False) -> None:
 def _json_metadata(metadata: dict) -> dict:
     """``metadata`` as strict JSON values, which is all pygltflib writes: NaN and infinities (that an
     NPZ's or a JSON's metadata may hold) become null, anything else not JSON its text."""
-    return json.loads(json.dumps(metadata, default=str), parse_constant=lambda constant: None)
+    return json.loads(json.dumps(json_safe(metadata), default=str), parse_constant=lambda constant: None)
 
 
 class _BufferBuilder:

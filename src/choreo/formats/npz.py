@@ -13,6 +13,7 @@ import json
 import numpy as np
 
 from ..errors import MotionFormatError
+from ..fileio import json_safe
 from ..motion import Motion, source_name
 from ..motion.motion import file_metadata
 from ..skeleton import SMPL24
@@ -27,7 +28,7 @@ def write_npz(motion: Motion, handle) -> None:
     arrays["fps"] = np.array(motion.fps, dtype=np.float64)
     arrays["joint_positions"] = motion.joint_positions(np.float32)
     arrays["offsets"] = motion.skeleton.offsets.astype(np.float64)
-    arrays["metadata"] = np.array(json.dumps(motion.metadata, default=str))
+    arrays["metadata"] = np.array(json.dumps(json_safe(motion.metadata), default=str))
     np.savez(handle, **arrays)
 
 
