@@ -36,7 +36,8 @@ from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
 from ..motion.motion import frame_chunks
 from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion, quaternion_to_matrix
-from .bvh import END_SITES, UNIT_SCALE, _local_rotations, above, detect_scale, in_world, read_bvh_raw, write_tree
+from .bvh import (END_SITES, UNIT_SCALE, _local_rotations, above, check_joints_above, detect_scale, in_world, read_bvh_raw,
+                  write_tree)
 
 LENGTHS = ("motion", "rig")
 
@@ -320,6 +321,7 @@ def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto
     rig = get_rig(rig)
     data = read_bvh_raw(path)
     index = _match_bones(data, rig, str(path))
+    check_joints_above(data, index[0], str(path))
     if len(data.values) == 0:
         raise MotionFormatError(f"{path}: no frames")
     rotmats_file, root = _local_rotations(data, translated=[index[0], *above(data, index[0])])
