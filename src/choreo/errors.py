@@ -39,3 +39,8 @@ class OutputError(ChoreoError):
 
 class DatasetError(InputError):
     """A dataset folder does not have the layout its reader expects."""
+
+
+class ChoreoNote(UserWarning):
+    """Something choreo did with an input that the user should know (a channel ignored, data
+    dropped): the CLI prints it as one ``note:`` line on stderr; from Python it is a warning."""

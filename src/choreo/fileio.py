@@ -200,3 +200,53 @@ def out_of_space_is_an_output_error(path: str | os.PathLike) -> Iterator[None]:
         if error.errno not in OUT_OF_SPACE:
             raise
         raise OutputError(f"cannot write {path}: {error.strerror}") from None
+
+
+def json_name(text: str) -> str:
+    """``text`` (a path or a file's name) as strict JSON can hold it: the bytes of a name that is
+    not UTF-8, which Python decodes to lone surrogates (``surrogateescape``) and ``json.dumps``
+    would write as ``\\udcff``, which strict parsers refuse, are written as ``\\xNN`` (Python's
+    ``backslashreplace`` of the original bytes). Names that are UTF-8 are returned unchanged."""
+    if not any("\ud800" <= char <= "\udfff" for char in text):
+        return text
+    try:
+        raw = os.fsencode(text)
+    except UnicodeEncodeError:  # a surrogate that no byte stands for (from an escaped JSON text)
+        raw = text.encode("utf-8", "surrogatepass")
+    return raw.decode("utf-8", "backslashreplace")
+
+
+def json_safe(value):
+    """``value`` with every string in it (keys too, at any depth) passed through :func:`json_name`;
+    anything else as it is (numbers, numpy values, None). Without such strings (nearly always),
+    ``value`` itself: looked through without recursion, so deep metadata is copied only when it must be."""
+    return _escaped(value) if _has_surrogates(value) else value
+
+
+def _has_surrogates(value) -> bool:
+    pending = [value]
+    while pending:
+        item = pending.pop()
+        if isinstance(item, os.PathLike):
+            item = os.fspath(item)
+        if isinstance(item, str):
+            if any("\ud800" <= char <= "\udfff" for char in item):
+                return True
+        elif isinstance(item, dict):
+            pending.extend(item.keys())
+            pending.extend(item.values())
+        elif isinstance(item, (list, tuple)):
+            pending.extend(item)
+    return False
+
+
+def _escaped(value):
+    if isinstance(value, os.PathLike) and isinstance(os.fspath(value), str):  # as default=str would write it
+        return json_name(os.fspath(value))
+    if isinstance(value, str):
+        return json_name(value)
+    if isinstance(value, dict):
+        return {_escaped(key): _escaped(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_escaped(item) for item in value]
+    return value

@@ -143,3 +143,53 @@ def test_a_song_whose_name_is_not_utf8_is_read(tmp_path, capsys):
     code, out, err = run(capsys, "info", os.fsdecode(name))
     assert code == 0, err
     assert "120 at 30 fps" in out  # 4 s of it analysed
+
+
+def assert_strict_json(text: str):
+    """What a strict parser takes: UTF-8, and no escaped lone surrogate (``\\udcff``) anywhere."""
+    import re
+
+    text.encode("utf-8")
+    assert not re.search(r"\\u[dD][89a-fA-F][0-9a-fA-F]{2}", text), text
+    return json.loads(text)
+
+
+@pytest.mark.hardening
+def test_json_outputs_write_a_name_that_is_not_utf8_as_escaped_bytes(tmp_path, capsys):
+    """Round five, item 15: --json (and every JSON that names a file: motion JSON, NPZ and glb
+    metadata, eval --json) wrote the lone surrogates Python decodes a non-UTF-8 byte to (``\\udcff``),
+    which strict JSON parsers refuse; such bytes are now ``\\xNN``, as choreo prints them."""
+    import soundfile
+
+    song = Path(os.fsdecode(os.path.join(os.fsencode(tmp_path), b"song\xff.wav")))
+    seconds = np.arange(6 * 22050) / 22050
+    soundfile.write(os.fsencode(song), 0.3 * np.sin(2 * np.pi * 220 * seconds) * (np.sin(2 * np.pi * 2 * seconds) > 0),
+                    22050)
+    bad = Path(os.fsdecode(os.path.join(os.fsencode(tmp_path), b"bad\xfe.wav")))
+    bad.write_bytes(b"RIFF\x00\x00\x00\x00WAVEnot audio")
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    code, out, err = run(capsys, "generate", song, bad, "--out-dir", out_dir, "--json", "--steps", "2", "-f", "npz")
+    assert code == 1, err
+    summary = assert_strict_json(out)
+    escaped = os.fsencode(tmp_path).decode("utf-8", "backslashreplace")
+    assert summary["songs"][0]["song"] == f"{escaped}/song\\xff.wav"
+    assert summary["songs"][0]["outputs"] == [f"{escaped}/out/song\\xff.npz"]
+    assert summary["songs"][1]["song"] == f"{escaped}/bad\\xfe.wav" and "bad\\xfe.wav" in summary["songs"][1]["error"]
+    dance_ = dance()
+    dance_.metadata = {"source": os.fsdecode(b"take\xff.bvh"), os.fsdecode(b"key\xfe"): [os.fsdecode(b"\xfd")]}
+    for kind in ("json", "npz", "glb"):
+        write_motion(dance_, tmp_path / f"dance.{kind}")
+    assert_strict_json((tmp_path / "dance.json").read_text())["metadata"] == \
+        {"source": "take\\xff.bvh", "key\\xfe": ["\\xfd"]}
+    assert_strict_json(str(np.load(tmp_path / "dance.npz")["metadata"]))["key\\xfe"] == ["\\xfd"]
+    glb = (tmp_path / "dance.glb").read_bytes()
+    length = int.from_bytes(glb[12:16], "little")
+    assert assert_strict_json(glb[20:20 + length].decode())["extras"]["metadata"]["source"] == "take\\xff.bvh"
+    (tmp_path / "gen").mkdir()
+    write_motion(dance(40), Path(os.fsdecode(os.path.join(os.fsencode(tmp_path), b"gen/a\xff.npz"))))
+    code, _, err = run(capsys, "eval", tmp_path / "gen", "--gt", tmp_path / "gen", "--json", tmp_path / "scores.json")
+    assert code == 0, err
+    text = (tmp_path / "scores.json").read_text()
+    assert_strict_json(text)
+    assert r'"name": "a\\xff"' in text  # the clip's name: a backslash, escaped in JSON, then xff

@@ -23,6 +23,7 @@ from choreo.formats import (
     write_motion,
 )
 from choreo.formats.bvh import detect_scale, write_bvh
+from choreo.formats.rigs import read_bvh_rig, write_bvh_rig
 from choreo.motion import Motion
 from choreo.skeleton import SMPL24, Skeleton, continuous_euler, euler_to_matrix, matrix_to_euler
 from tests.conftest import wandering_dance
@@ -656,3 +657,72 @@ def test_a_huge_token_in_the_hierarchy_is_cut_in_the_refusal(dance, old, new, me
     with pytest.raises(MotionFormatError) as raised:
         bvh.parse_bvh(smpl_text(dance).replace(old, new, 1), "x.bvh")
     assert str(raised.value).endswith(message) and len(str(raised.value)) < 120
+
+
+def with_positions_on_l_hip(text: str) -> str:
+    """``text`` (choreo's SMPL-24 BVH) with position channels on l_hip, the first joint below the
+    pelvis: its three values come after the pelvis's six in every frame row."""
+    head, motion = text.split("MOTION\n")
+    head = head.replace("CHANNELS 3", "CHANNELS 6 Xposition Yposition Zposition", 1)
+    lines = motion.splitlines()
+    rows = [" ".join(line.split()[:6] + ["0.1", "0.2", "0.3"] + line.split()[6:]) for line in lines[2:]]
+    return head + "MOTION\n" + "\n".join(lines[:2] + rows) + "\n"
+
+
+@pytest.mark.hardening
+def test_position_channels_below_the_root_are_one_note_in_choreos_words(tmp_path, dance, capsys):
+    """Round five, item 10: position channels on a joint other than the root printed Python's raw
+    UserWarning, its source file, line number and the source line; now one ``note:`` line."""
+    from tests.helpers import run_cli
+
+    path = tmp_path / "pos.bvh"
+    path.write_text(with_positions_on_l_hip(smpl_text(dance)))
+    code, _, err = run_cli(capsys, "convert", path, tmp_path / "out.npz")
+    assert code == 0, err
+    lines = err.splitlines()
+    assert lines[0] == "note: BVH position channels on non-root joints are ignored (bone offsets are used)"
+    assert len(lines) == 2 and lines[1].startswith("wrote ") and "Warning" not in err and "bvh.py" not in err
+    with pytest.warns(UserWarning):  # from Python, still a warning
+        read_motion(path)
+
+
+def stacked_above(text: str, joints: int, channels: bool = False) -> str:
+    """``text`` (choreo's SMPL-24 BVH) under ``joints`` joints stacked above its pelvis, each at no
+    offset and turned by nothing (``channels``: three rotation channels of zeros)."""
+    head, motion = text.split("MOTION\n")
+    declared = "CHANNELS 3 Zrotation Xrotation Yrotation\n" if channels else ""
+    opening = "".join(f"{'ROOT' if k == 0 else 'JOINT'} s{k}\n{{\nOFFSET 0 0 0\n{declared}" for k in range(joints))
+    lines = motion.splitlines()
+    zeros = "0 " * (3 * joints) if channels else ""
+    return ("HIERARCHY\n" + opening + "JOINT" + head[len("HIERARCHY\nROOT"):] + "}\n" * joints + "MOTION\n"
+            + "\n".join(lines[:2] + [zeros + line for line in lines[2:]]) + "\n")
+
+
+@pytest.mark.hardening
+def test_thousands_of_joints_stacked_above_the_pelvis_are_refused_at_once(tmp_path, capsys):
+    """Round five, item 7: joints above the pelvis are composed into it at every frame, each with
+    its own (T, 3, 3) rotations: 5,000 of them without channels in a 476 kB file peaked at 780 MB,
+    100,000 (4.7 MB) at 14.5 GB after 52 s. More than MAX_JOINTS_ABOVE (32) are refused, exit 2,
+    before anything per frame, as unnamed joints below the pelvis are; 32 still read."""
+    import time
+
+    from tests.conftest import wandering_dance
+    from tests.helpers import assert_one_line_error, run_cli
+
+    dancer = wandering_dance(3, 300, 30.0)
+    text = smpl_text(dancer)
+    path = tmp_path / "stacked.bvh"
+    for joints, channels in ((5000, False), (2000, True)):
+        path.write_text(stacked_above(text, joints, channels))
+        started = time.perf_counter()
+        code, _, err = run_cli(capsys, "convert", path, tmp_path / "out.npz")
+        assert_one_line_error(code, err)
+        assert f"{joints} joints above pelvis (choreo composes at most 32" in err and not (tmp_path / "out.npz").exists()
+        assert time.perf_counter() - started < 10
+    path.write_text(stacked_above(text, bvh.MAX_JOINTS_ABOVE, channels=True))
+    np.testing.assert_allclose(read_motion(path).joint_positions(), dancer.joint_positions(), atol=1e-5)
+    rig = io.BytesIO()
+    write_bvh_rig(dancer, rig, "mixamo")  # the Mixamo reader checks the same
+    path.write_text(stacked_above(rig.getvalue().decode(), 100))
+    with pytest.raises(MotionFormatError, match="100 joints above mixamorig:Hips"):
+        read_bvh_rig(path)

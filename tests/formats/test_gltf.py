@@ -32,6 +32,7 @@ from choreo.errors import (  # noqa: E402
 from choreo.formats import (  # noqa: E402
     gltf,
     read_motion,
+    write_motion,
 )
 from choreo.formats.gltf import read_glb, write_glb  # noqa: E402  # noqa: E402
 from choreo.motion import Motion  # noqa: E402  # noqa: E402
@@ -932,3 +933,65 @@ def test_a_json_chunk_longer_than_the_file_is_refused_before_it_is_allocated(tmp
     with pytest.raises(MotionFormatError) as raised:
         read_glb(path)
     assert str(raised.value) == f"{path}: damaged glb (its JSON chunk reaches past the end of the file)"
+
+
+# -- round five, item 2: a glb's metadata ----------------------------------------------------------
+def looping_emote(frames: int = 60) -> Motion:
+    from tests.conftest import wandering_dance
+
+    dancer = wandering_dance(3, frames, 30.0)
+    dancer.metadata = {"loop": {"bars": 1, "beats_per_bar": 4, "seconds": frames / 30, "turn_degrees": 90.0,
+                                "travel_m": [0.1, -0.2]}, "genre": "waltz", "seed": 3, "source": "song.wav"}
+    return dancer
+
+
+@pytest.mark.hardening
+@pytest.mark.parametrize("output", ["back.npz", "back.glb", "back.json"])
+def test_a_glbs_metadata_is_read_back(tmp_path, capsys, output):
+    """Round five, item 2: converting the glb of a --loop dance (a root bone under it) to NPZ, glb
+    or JSON lost its loop (turn and travel) and all other metadata the glb writer keeps in extras."""
+    from tests.helpers import run_cli
+
+    write_motion(looping_emote(), tmp_path / "emote.glb", root_motion=True)
+    assert read_motion(tmp_path / "emote.glb").metadata == {**looping_emote().metadata, "source": "emote.glb"}
+    code, _, err = run_cli(capsys, "convert", tmp_path / "emote.glb", tmp_path / output)
+    assert code == 0 and "note" not in err, err
+    back = read_motion(tmp_path / output).metadata
+    assert back["loop"] == looping_emote().metadata["loop"] and back["genre"] == "waltz" and back["seed"] == 3
+    code, _, err = run_cli(capsys, "convert", tmp_path / "emote.glb", tmp_path / "fast.npz", "--fps", "60")
+    assert code == 0 and read_motion(tmp_path / "fast.npz").num_frames == 120  # resampled as a loop: whole cycles
+
+
+@pytest.mark.hardening
+@pytest.mark.parametrize("output, named", [("dance.bvh", "dance.bvh"), ("-", "the bvh on stdout")])
+def test_writing_metadata_to_a_bvh_says_it_is_dropped(tmp_path, capsys, output, named):
+    from tests.helpers import run_cli
+
+    write_motion(looping_emote(), tmp_path / "emote.glb")
+    target = output if output == "-" else tmp_path / output
+    code, out, err = run_cli(capsys, "convert", tmp_path / "emote.glb", target, "--format", "bvh")
+    assert code == 0, err
+    named = named if output == "-" else tmp_path / named
+    assert err.splitlines()[0] == f"note: {named} cannot hold the dance's metadata (loop, genre, seed): dropped"
+    write_motion(still(4), tmp_path / "plain.glb")  # no metadata but its own name: nothing to say
+    code, _, err = run_cli(capsys, "convert", tmp_path / "plain.glb", tmp_path / "plain.bvh")
+    assert code == 0 and "note" not in err
+
+
+@pytest.mark.hardening
+@pytest.mark.parametrize("loop", [5, "x", {"turn_degrees": "x", "travel_m": [1, 2]}, {"turn_degrees": 9, "travel_m": [1]},
+                                  {"turn_degrees": 9, "travel_m": [1, float("nan")]}])
+@pytest.mark.parametrize("kind", ["glb", "npz", "json"])
+def test_a_damaged_loop_in_a_files_metadata_is_no_loop(tmp_path, capsys, loop, kind):
+    """Found with item 2: a ``loop`` that is not one (from any file that keeps metadata) crashed
+    ``convert --fps``/``--in-place`` (exit 70, TypeError); it is dropped on reading."""
+    from tests.helpers import run_cli
+
+    dancer = looping_emote()
+    dancer.metadata = {"loop": loop, "genre": "waltz"}
+    write_motion(dancer, tmp_path / f"bad.{kind}")
+    assert read_motion(tmp_path / f"bad.{kind}").metadata["genre"] == "waltz"
+    assert "loop" not in read_motion(tmp_path / f"bad.{kind}").metadata
+    for flag in ("--fps=60", "--in-place"):
+        code, _, err = run_cli(capsys, "convert", tmp_path / f"bad.{kind}", tmp_path / "out.npz", flag)
+        assert code == 0, err

@@ -43,6 +43,7 @@ def _run(argv: list[str] | None) -> int:
                 # numpy's overflow / invalid-value notes mean nothing to a user, and what they warn of
                 # is checked where it matters (non-finite motion, audio and features are refused).
                 warnings.filterwarnings("ignore", category=RuntimeWarning)
+            warnings.showwarning = _show_warning(warnings.showwarning)
             code = app(args=argv, prog_name="choreo", standalone_mode=False)  # typer: Ctrl-C is 130
     except ChoreoError as error:
         _print_error(str(error))
@@ -65,6 +66,27 @@ def _run(argv: list[str] | None) -> int:
         _print_error(f"internal error ({type(error).__name__}: {error}); set CHOREO_DEBUG=1 for a traceback")
         return 70
     return code if isinstance(code, int) else 0
+
+
+def _show_warning(show):
+    """``warnings.showwarning`` that prints choreo's own notes (:class:`~choreo.errors.ChoreoNote`)
+    as one ``note:`` line in choreo's words, not Python's warning with its source line; others as ``show``."""
+    from ..errors import ChoreoNote
+
+    def shown(message, category, filename, lineno, file=None, line=None):
+        if not issubclass(category, ChoreoNote):
+            return show(message, category, filename, lineno, file, line)
+        print_note(str(message))
+
+    return shown
+
+
+def print_note(message: str) -> None:
+    """One ``note:`` line on stderr: something done with the user's files that they should know."""
+    from .progress import stderr_console
+    from .text import markup
+
+    stderr_console.print(f"[yellow]note:[/yellow] {markup(message.strip())}", highlight=False)
 
 
 def _print_error(message: str) -> None:

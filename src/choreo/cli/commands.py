@@ -114,6 +114,7 @@ def convert(
       choreo convert dance.bvh dance.fbx --rig mixamo --root-motion  # Unreal's root motion
     """
     from ..formats import check_output_format, read_motion, write_motion
+    from ..formats.registry import dropped_metadata
     from ..motion.delivery import check_fps, check_travel, delivered
 
     if fps is not None:
@@ -123,6 +124,13 @@ def convert(
     motion = read_motion(_require_file(source))
     motion = delivered(motion, fps, in_place)
     written = write_motion(motion, target, format=format, rig=rig, root_motion=root_motion)
+    dropped = dropped_metadata(motion, target, format)
+    if dropped:
+        from . import print_note
+
+        keys = ", ".join(key[:40] for key in dropped[:6]) + (", ..." if len(dropped) > 6 else "")
+        name = written if target != "-" else f"the {format.lower().lstrip('.')} on stdout"
+        print_note(f"{name} cannot hold the dance's metadata ({keys}): dropped")
     if target != "-":
         stderr_console.print(f"wrote {markup(written)} ({motion.num_frames} frames at {motion.fps:g} fps)",
                              highlight=False)

@@ -89,12 +89,12 @@ def evaluate(
         stderr_console.print(f"[yellow]warning:[/yellow] {markup(message)}")
     _print_report(report)
     if json_path is not None:
-        from ..fileio import atomic_output
+        from ..fileio import atomic_output, json_safe
 
         document = {"generated": str(generated), "ground_truth": str(gt), **report.to_dict(),
                     "notes": notes + truth_notes, "warnings": messages}
         with atomic_output(json_path) as handle:
-            handle.write(json.dumps(document, indent=1, default=_json_default).encode())
+            handle.write(json.dumps(json_safe(document), indent=1, default=_json_default).encode())
         stderr_console.print(f"wrote {markup(json_path)}")
 
 

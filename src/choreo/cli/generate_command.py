@@ -60,6 +60,7 @@ def generate(
     from collections import Counter
 
     from ..errors import ChoreoError, OutputError, ParameterError
+    from ..fileio import json_safe
     from .batch import Shard, already_written, batch_formats
 
     if output is not None and out_dir is not None:
@@ -115,7 +116,7 @@ def generate(
             stderr_console.print(f"[red]failed[/red] {markup(song)}: {markup(message)}", highlight=False)
             summaries.append({"song": str(song), "ok": False, "error": message, "exit_code": code})
     if json_summary:
-        print(json.dumps({"songs": summaries, "failed": failed}, indent=2))
+        print(json.dumps(json_safe({"songs": summaries, "failed": failed}), indent=2))  # names not UTF-8: \xNN
     if failed:
         raise ChoreoError(f"{failed} of {len(songs)} songs failed")  # exit code 1
 

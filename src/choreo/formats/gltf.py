@@ -26,8 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
+from ..fileio import json_safe
 from ..motion import Motion, source_name
 from ..motion.delivery import ROOT_BONE, with_root_bone
+from ..motion.motion import file_metadata
 from ..skeleton import SMPL24, matrix_to_quaternion, quaternion_to_matrix
 from .bvh import END_SITES, check_joint_names
 
@@ -83,10 +85,16 @@ def write_glb(motion: Motion, handle, root_motion: bool = False) -> None:
         materials=[gl.Material(name="body", pbrMetallicRoughness=gl.PbrMetallicRoughness(
             baseColorFactor=list(BODY_COLOUR), metallicFactor=0.0, roughnessFactor=0.8))],
         accessors=buffer.accessors, bufferViews=buffer.views, buffers=[gl.Buffer(byteLength=len(buffer.data))],
-        extras={"fps": float(motion.fps), "metadata": json.loads(json.dumps(motion.metadata, default=str))},
+        extras={"fps": float(motion.fps), "metadata": _json_metadata(motion.metadata)},
     )
     document.set_binary_blob(bytes(buffer.data))
     handle.write(b"".join(document.save_to_bytes()))
+
+
+def _json_metadata(metadata: dict) -> dict:
+    """``metadata`` as strict JSON values, which is all pygltflib writes: NaN and infinities (that an
+    NPZ's or a JSON's metadata may hold) become null, anything else not JSON its text."""
+    return json.loads(json.dumps(json_safe(metadata), default=str), parse_constant=lambda constant: None)
 
 
 class _BufferBuilder:
@@ -363,4 +371,5 @@ def _motion_of(gl, document, path) -> Motion:
             fps = float(stored)  # exact, where the float32 key times are not
     else:  # one key says nothing about the rate: ours is in the extras
         fps = float(stored) if stored is not None else 30.0
-    return Motion(root, quaternions, fps=fps, skeleton=SMPL24.with_offsets(offsets), metadata={"source": source_name(path)})
+    metadata = {**file_metadata(extras.get("metadata")), "source": source_name(path)}  # as NPZ: the name read
+    return Motion(root, quaternions, fps=fps, skeleton=SMPL24.with_offsets(offsets), metadata=metadata)

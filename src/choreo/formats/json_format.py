@@ -12,7 +12,9 @@ import json
 import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
+from ..fileio import json_safe
 from ..motion import Motion, source_name
+from ..motion.motion import file_metadata
 from ..skeleton import SMPL24, Skeleton
 from . import json_arrays
 
@@ -31,19 +33,20 @@ def write_json(motion: Motion, handle) -> None:
             "parents": list(motion.skeleton.parents), "offsets": np.round(motion.skeleton.offsets, 6).tolist()}
     bulk = {"root_positions": (motion.root_positions, 6), "rotations": (motion.axis_angle(), 7),
             "joint_positions": (motion.joint_positions(), 5)}
-    handle.write(json.dumps(head)[:-1].encode())
+    handle.write(json.dumps(json_safe(head))[:-1].encode())
     for name, (values, decimals) in bulk.items():
         handle.write(f", {json.dumps(name)}: [".encode())
         for start in range(0, len(values), CHUNK_FRAMES):
             block = json.dumps(np.round(values[start:start + CHUNK_FRAMES], decimals).tolist())[1:-1]
             handle.write(((", " if start else "") + block).encode())
         handle.write(b"]")
-    handle.write(f', "metadata": {json.dumps(motion.metadata, default=str)}}}'.encode())
+    handle.write(f', "metadata": {json.dumps(json_safe(motion.metadata), default=str)}}}'.encode())
 
 
 def _metadata(document: dict, path) -> dict:
     """The file's metadata, its source reduced to a file name (older files hold absolute paths)."""
-    metadata = dict(document.get("metadata") or {})
+    stored = document.get("metadata") or {}
+    metadata = file_metadata(dict(stored))  # a list of pairs too, as before
     metadata["source"] = source_name(str(metadata.get("source") or path))
     return metadata
 

@@ -13,7 +13,9 @@ import json
 import numpy as np
 
 from ..errors import MotionFormatError
+from ..fileio import json_safe
 from ..motion import Motion, source_name
+from ..motion.motion import file_metadata
 from ..skeleton import SMPL24
 from .safe_arrays import load_npz
 from .smpl_params import first_number, motion_to_smpl_params, smpl_params_to_motion
@@ -26,7 +28,7 @@ def write_npz(motion: Motion, handle) -> None:
     arrays["fps"] = np.array(motion.fps, dtype=np.float64)
     arrays["joint_positions"] = motion.joint_positions(np.float32)
     arrays["offsets"] = motion.skeleton.offsets.astype(np.float64)
-    arrays["metadata"] = np.array(json.dumps(motion.metadata, default=str))
+    arrays["metadata"] = np.array(json.dumps(json_safe(motion.metadata), default=str))
     np.savez(handle, **arrays)
 
 
@@ -47,7 +49,7 @@ def read_npz(path) -> Motion:
         try:
             metadata = json.loads(str(data["metadata"]))
             if isinstance(metadata, dict):
-                motion.metadata = {**metadata, "source": source_name(path)}
+                motion.metadata = {**file_metadata(metadata), "source": source_name(path)}
         except (ValueError, RecursionError):  # metadata is optional: unreadable JSON is ignored
             pass
     return motion

@@ -210,6 +210,18 @@ def write_motions(motion: Motion, paths: list[str], format: str | None = None, r
     return [str(p) for p in paths]
 
 
+METADATA_FORMATS = ("npz", "json", "glb")  # the formats that carry a motion's metadata (loop, genre, seed ...)
+FILE_KEYS = ("source", "rig")  # metadata every reader sets from the file itself: its name, its bones
+
+
+def dropped_metadata(motion: Motion, path: str | os.PathLike, format: str | None = None) -> list[str]:
+    """The keys of ``motion``'s metadata that writing it to ``path`` drops: all but the file's own
+    name and rig where the format holds none (BVH, FBX, pkl, npy), none elsewhere."""
+    if _format_for(path, format, OutputError).name in METADATA_FORMATS:
+        return []
+    return [str(key) for key in motion.metadata if key not in FILE_KEYS]
+
+
 def write_motion(motion: Motion, path: str | os.PathLike, format: str | None = None, rig: str | None = None,
                  root_motion: bool = False) -> str:
     """Write ``motion`` atomically (or to stdout for "-"), optionally on another ``rig`` or under a

@@ -34,8 +34,10 @@ import numpy as np
 
 from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
-from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion
-from .bvh import END_SITES, UNIT_SCALE, _local_rotations, above, detect_scale, in_world, read_bvh_raw, write_tree
+from ..motion.motion import frame_chunks
+from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion, quaternion_to_matrix
+from .bvh import (END_SITES, UNIT_SCALE, _local_rotations, above, check_joints_above, detect_scale, in_world, read_bvh_raw,
+                  write_tree)
 
 LENGTHS = ("motion", "rig")
 
@@ -249,10 +251,17 @@ def retarget(motion: Motion, rig: Rig | str, lengths: str = "motion") -> Retarge
     if rig is None:
         raise ParameterError("retarget needs a rig other than SMPL-24")
     corrections, offsets, _, root_scale = _rig_rest(motion.skeleton, rig, lengths)
-    local = motion.rotation_matrices()[:, list(rig.smpl_joints)]  # (T, B, 3, 3)
-    parent_corrections = np.stack([np.eye(3) if p < 0 else corrections[p] for p in rig.parents])
-    local = np.swapaxes(parent_corrections, -1, -2) @ local @ corrections
+    local = np.empty((motion.num_frames, len(rig.bones), 3, 3))
+    for chunk in frame_chunks(motion.num_frames):
+        local[chunk] = _rig_local(motion.rotations[chunk], rig, corrections)
     return Retargeted(motion.root_positions * root_scale, local, offsets)
+
+
+def _rig_local(rotations: np.ndarray, rig: Rig, corrections: np.ndarray) -> np.ndarray:
+    """(T, B, 3, 3) the rig's local rotations (rest = identity) for (T, 24, 4) SMPL-24 ones."""
+    local = quaternion_to_matrix(rotations[:, list(rig.smpl_joints)])  # (T, B, 3, 3)
+    parent_corrections = np.stack([np.eye(3) if p < 0 else corrections[p] for p in rig.parents])
+    return np.swapaxes(parent_corrections, -1, -2) @ local @ corrections
 
 
 def rig_end_sites(motion: Motion, rig: Rig | str, lengths: str = "motion") -> dict[int, np.ndarray]:
@@ -263,9 +272,12 @@ def rig_end_sites(motion: Motion, rig: Rig | str, lengths: str = "motion") -> di
 def rig_motion(motion: Motion, rig: Rig | str, lengths: str = "motion") -> Motion:
     """The retargeted dance as a Motion on the rig's skeleton (names, tree, T-pose offsets)."""
     rig = get_rig(rig)
-    root, local, offsets = retarget(motion, rig, lengths)
+    corrections, offsets, _, root_scale = _rig_rest(motion.skeleton, rig, lengths)
+    quaternions = np.empty((motion.num_frames, len(rig.bones), 4))
+    for chunk in frame_chunks(motion.num_frames):  # a long dance's matrices at once would take gigabytes
+        quaternions[chunk] = matrix_to_quaternion(_rig_local(motion.rotations[chunk], rig, corrections))
     skeleton = Skeleton(rig.bones, rig.parents, offsets)
-    return Motion(root, matrix_to_quaternion(local), fps=motion.fps, skeleton=skeleton,
+    return Motion(motion.root_positions * root_scale, quaternions, fps=motion.fps, skeleton=skeleton,
                   metadata={**motion.metadata, "rig": rig.name})
 
 
@@ -309,6 +321,7 @@ def read_bvh_rig(path: str | Path, rig: Rig | str = "mixamo", units: str = "auto
     rig = get_rig(rig)
     data = read_bvh_raw(path)
     index = _match_bones(data, rig, str(path))
+    check_joints_above(data, index[0], str(path))
     if len(data.values) == 0:
         raise MotionFormatError(f"{path}: no frames")
     rotmats_file, root = _local_rotations(data, translated=[index[0], *above(data, index[0])])

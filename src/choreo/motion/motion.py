@@ -36,6 +36,25 @@ def source_name(path: str | os.PathLike) -> str:
     return os.path.basename(os.fspath(path))
 
 
+def file_metadata(stored) -> dict:
+    """A file's stored metadata as a motion carries it: a dict (anything else: none), without a
+    ``loop`` that is not one (choreo.looping reads its ``turn_degrees`` and ``travel_m`` when the
+    dance is resampled or put in place: a damaged one would crash there, so it is no loop)."""
+    metadata = dict(stored) if isinstance(stored, dict) else {}
+    if "loop" in metadata and not _is_loop(metadata["loop"]):
+        del metadata["loop"]
+    return metadata
+
+
+def _is_loop(loop) -> bool:
+    def finite(value) -> bool:
+        return type(value) in (int, float) and bool(np.isfinite(value))
+
+    travel = loop.get("travel_m") if isinstance(loop, dict) else None
+    return (isinstance(loop, dict) and finite(loop.get("turn_degrees")) and isinstance(travel, list)
+            and len(travel) == 2 and all(finite(v) for v in travel))
+
+
 @dataclass(eq=False)
 class Motion:
     """A skeleton animation. Y up, metres.
