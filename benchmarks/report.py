@@ -1,6 +1,6 @@
 """The quality, style-adherence, speed and memory report of both generators, in one command.
 
-    python benchmarks/report.py [--out docs/report.md] [--edge generators/choreo_sgmd/weights/sgmd-edge-m2d.pt] [--quick]
+    python benchmarks/report.py [--out docs/dev/report.md] [--edge generators/choreo_sgmd/weights/sgmd-edge-m2d.pt] [--quick]
 
 On the M2D test split (213 windows of 5 s, scored against the train split as the reference row):
 ground truth; a nearest-neighbour retrieval baseline (the train window whose music features are
@@ -142,7 +142,7 @@ def plot_speed(rows: list[tuple], path: Path) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
-    parser.add_argument("--out", type=Path, default=REPO / "docs" / "report.md")
+    parser.add_argument("--out", type=Path, default=REPO / "docs" / "dev" / "report.md")
     parser.add_argument("--edge", type=Path, default=EDGE_CHECKPOINT)
     parser.add_argument("--durations", type=float, nargs="+", default=[10, 60, 600])
     args = parser.parse_args()

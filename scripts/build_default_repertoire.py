@@ -40,7 +40,7 @@ def main() -> None:
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "m2d"))
     parser.add_argument("--out", default=str(DEFAULT_REPERTOIRE))
     parser.add_argument("--checkpoint", default=str(DEFAULT_CHECKPOINT))
-    parser.add_argument("--footsteps", action="store_true", help="cut the clips from dances the step planner has finished")
+    parser.add_argument("--footsteps", action="store_true", help="cut the clips from dances footsteps has finished")
     args = parser.parse_args()
     sgmd = load_backend("sgmd")  # the bundled SGMD checkpoint
     clips = sorted((c for c in load_dataset(args.data) if c.split == TRAIN and c.audio_path), key=lambda c: c.name)

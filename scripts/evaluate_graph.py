@@ -80,7 +80,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--genre-style", action="store_true",
                         help="give each window's genre as the style (the graph then dances only that genre's clips)")
-    parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without the step planner (choreo.finishing.footsteps)")
+    parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without footsteps (choreo.finishing.footsteps)")
     args = parser.parse_args()
 
     clips = load_dataset(args.data)

@@ -44,7 +44,7 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--finished", action="store_true",
                         help="also score each dance after the beat lock (choreo.finishing), side by side")
-    parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without the step planner (choreo.finishing.footsteps)")
+    parser.add_argument("--no-footsteps", action="store_true", help="with --finished: also score without footsteps (choreo.finishing.footsteps)")
     parser.add_argument("--foot-lock", action="store_true", help="with --finished: the foot lock too")
     parser.add_argument("--by-genre", action="store_true",
                         help="also score each genre's windows against the train windows of that genre")

@@ -8,7 +8,7 @@ Each area is mutated by mutmut 3 in its own throw-away clone under /tmp (mutmut 
 sources it mutates), against the test files that guard it, one child at a time. Prints, per
 area, killed / survived / timeout / untested counts and the names of the surviving mutants, and
 writes the lot to ``--out`` (JSON). ``mutmut show NAME`` inside the printed clone shows one
-mutant's diff. docs/mutation.md keeps the last scores and why each survivor is harmless.
+mutant's diff. docs/dev/mutation.md keeps the last scores and why each survivor is harmless.
 """
 
 from __future__ import annotations

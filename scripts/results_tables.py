@@ -253,7 +253,7 @@ def whole_songs_outside() -> str:
 
 
 def whole_songs_guidance() -> str:
-    """docs/results.md, "Where the rushing and the jitter came from": music guidance on whole songs."""
+    """docs/results.md, "Sampler and guidance": music guidance on whole songs."""
     rows = []
     for label, name in GUIDANCE:
         means, fids = run_means(name), run(name)["fid"]
@@ -264,9 +264,9 @@ def whole_songs_guidance() -> str:
     return table(header, ["---:"] * 3 + ["---"] * 2 + ["---:"], rows)
 
 
-# Tables of runs on the validation clips (validation_table): name -> (first column's title, runs). Where each
-# stands in docs/results.md: "Chosen on the validation clips" (music guidance, finishing, accent depth, ChoreoGraph,
-# the Latin footsteps) and "What the feet and the beats still miss" (the ankles, the sampler's pull).
+# Tables of runs on the validation clips (validation_table): name -> (first column's title, runs). Each stands in
+# docs/results.md under the default it decided ("Sampler and guidance", "The travel's guidance", "Finishing passes",
+# "Accent", "Feet", "The graph's floor") or, not kept, in "What the feet and the beats still miss".
 VALIDATION_TABLES = {
     "whole-songs-validation": ("music guidance", VALIDATION),
     "whole-songs-validation-finishing": ("finishing (root path cut-off, footsteps strength, pace bound)", VALIDATION_FINISHING),

@@ -1,4 +1,4 @@
-"""The step planner (choreo.finishing.footsteps): feet that stand until the body leaves them, then step."""
+"""Footsteps (choreo.finishing.footsteps): feet that stand until the body leaves them, then step."""
 
 import numpy as np
 import pytest

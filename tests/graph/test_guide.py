@@ -17,7 +17,7 @@ from choreo_graph.config import NODE_FRAMES, GraphConfig
 from choreo_graph.guide import Guide
 from choreo_graph.repertoire import Repertoire
 
-pytestmark = pytest.mark.survivor  # written from the graph-guide mutation run's survivors (docs/mutation.md)
+pytestmark = pytest.mark.survivor  # written from the graph-guide mutation run's survivors (docs/dev/mutation.md)
 
 CLIP_FRAMES = 240
 

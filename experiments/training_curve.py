@@ -1,8 +1,8 @@
 """SGMD's metrics against training time, beside the issue's targets: how far each target is.
 
-    python scripts/experiments/training_curve.py --start 2026-12-03T08:35:10 --out docs/report/sgmd_training_curve.png \
+    python -m experiments.training_curve --start 2026-12-03T08:35:10 --out docs/report/sgmd_training_curve.png \
         CHECKPOINT@TIME[@SERIES] [CHECKPOINT@TIME[@SERIES] ...]
-    python scripts/experiments/training_curve.py --measured docs/report/sgmd_recon_curve.csv \
+    python -m experiments.training_curve --measured docs/report/sgmd_recon_curve.csv \
         --out docs/report/sgmd_recon_curve.png
 
 Each CHECKPOINT (a copy of a run's last.pt taken when it was written, TIME its ISO time or a Unix
@@ -32,8 +32,9 @@ from choreo import load_backend  # noqa: E402
 from choreo.datasets import load_dataset  # noqa: E402
 from choreo.metrics.protocol import TABLE_HEADER, ScoringSet, score_generator, table_row  # noqa: E402
 
-REPO = Path(__file__).resolve().parents[2]
-REAL = {"fid_k": 18.31, "fid_g": 3.28, "div_k": 9.40, "pfc": 0.853}  # the reference row (docs/results.md)
+REPO = Path(__file__).resolve().parents[1]
+# the reference row (docs/history/results-2026-12-01-to-2026-12-04.md, "Reference row: M2D ground truth")
+REAL = {"fid_k": 18.31, "fid_g": 3.28, "div_k": 9.40, "pfc": 0.853}
 TARGETS = {"fid_k": ("<=", 2 * REAL["fid_k"]), "fid_g": ("<=", 15.0), "div_k": (">=", 0.67 * REAL["div_k"]),
            "pfc": ("<=", 1.2 * REAL["pfc"]), "genre": (">=", 0.80)}
 TITLES = {"fid_k": "FID_k", "fid_g": "FID_g", "div_k": "Div_k", "pfc": "PFC", "genre": "requested genre recognised"}

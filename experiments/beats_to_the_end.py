@@ -1,6 +1,6 @@
 """How well a whole song's last minutes keep the beat, with the tracker's old trim and today's.
 
-    python scripts/experiments/beats_to_the_end.py [--song EsoXLB-CPU.wav] [--bpm 128] [--start 150] [--end 224]
+    python -m experiments.beats_to_the_end [--song EsoXLB-CPU.wav] [--bpm 128] [--start 150] [--end 224]
 
 Until 2026-12-05 the default tracker took a song's quieter last minutes for a fade-out and heard no
 beat there (LMMS's EsoXLB-CPU: none after 146 of its 236 s), so the beat lock left them alone

@@ -1,6 +1,6 @@
 """How seamless --loop's dances are, played over and over.
 
-    python scripts/experiments/loop_seam.py loop.npz [more.npz ...]
+    python -m experiments.loop_seam loop.npz [more.npz ...]
 
 Per file: the step from the last frame into the next cycle's first (the first frame turned and
 moved by the per-cycle turn and travel in the metadata, i.e. in root-local space) against the

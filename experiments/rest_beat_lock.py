@@ -1,7 +1,7 @@
 """The beat-rate lock (benchmarks/beat_lock.py --finished) of the songs whose benchmark minute
 reaches a closing silence, with and without the rest pass, on one render and one take.
 
-    python scripts/experiments/rest_beat_lock.py [--seed 0]
+    python -m experiments.rest_beat_lock [--seed 0]
 
 docs/results.md, "Finishing passes" (Rest). Each dance's beats are compared, as the benchmark
 does, at its own song's stated tempo against every other LMMS song's: the pairs it wins.
@@ -10,18 +10,13 @@ does, at its own song's stated tempo against every other LMMS song's: the pairs 
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
+from choreo.finishing import finish
+from choreo.generator import GenerationRequest
+from choreo.metrics import salience_at, same_pulse
+from choreo.music import Music, audio_duration
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "benchmarks"))
-import beat_lock as bench  # noqa: E402
-from outside_songs import outside_songs  # noqa: E402
-
-from choreo.finishing import finish  # noqa: E402
-from choreo.generator import GenerationRequest  # noqa: E402
-from choreo.metrics import salience_at, same_pulse  # noqa: E402
-from choreo.music import Music, audio_duration  # noqa: E402
+import benchmarks.beat_lock as bench  # benchmarks/beat_lock.py, which imports benchmarks/outside_songs.py
+from benchmarks.outside_songs import outside_songs
 
 
 def main() -> None:

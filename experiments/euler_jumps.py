@@ -1,6 +1,6 @@
 """How often a BVH rotation channel jumps by more than 180 degrees between two frames.
 
-    python scripts/experiments/euler_jumps.py [--songs DANCE_C_4 DANCE_R_3 DANCE_W_4] [--seed 1]
+    python -m experiments.euler_jumps [--songs DANCE_C_4 DANCE_R_3 DANCE_W_4] [--seed 1]
 
 Issue 47, part 1 (docs/formats.md, "BVH"). Each frame's ZXY angles solved on their own (as choreo
 wrote them until 2026-12-05) against the continuous curves it writes now
@@ -11,7 +11,6 @@ style) and for the real dancers.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,9 +20,9 @@ from choreo.datasets import load_dataset
 from choreo.formats.bvh import ROTATION_ORDER
 from choreo.skeleton import continuous_euler, matrix_to_euler
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "scripts"))
-from evaluate_whole_songs import song_of  # noqa: E402
+from scripts.evaluate_whole_songs import song_of
+
+REPO = Path(__file__).resolve().parents[1]
 
 
 def jumps(rotation_matrices: np.ndarray) -> tuple[int, int]:

@@ -2,7 +2,7 @@
 the bundled model's dance finished without and with footsteps (do the feet step, or glide with
 the body?).
 
-    python scripts/experiments/feet_plot.py OUT.png [CHECKPOINT]
+    python -m experiments.feet_plot OUT.png [CHECKPOINT]
 """
 import sys
 from pathlib import Path
@@ -19,8 +19,8 @@ from choreo.finishing import finish  # noqa: E402
 from choreo.pipeline import Finishing  # noqa: E402
 from choreo.metrics.protocol import generate_window_motions, music_beats, scoring_windows  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[3] / "shared" / "data" / "m2d"
-CHECKPOINT = Path(__file__).resolve().parents[2] / "generators" / "choreo_sgmd" / "weights" / "sgmd-cpu-m2d.pt"
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "m2d"
+CHECKPOINT = Path(__file__).resolve().parents[1] / "generators" / "choreo_sgmd" / "weights" / "sgmd-cpu-m2d.pt"
 clips = load_dataset(DATA)
 windows = scoring_windows([c for c in clips if c.split == TEST])
 pick = [i for i, w in enumerate(windows) if w.genre == "rumba"][5:6] + [i for i, w in enumerate(windows) if w.genre == "waltz"][10:11]

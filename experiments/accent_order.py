@@ -1,6 +1,6 @@
 """Where the accent goes among the finishing passes: after all of them, or before the footsteps.
 
-    python scripts/experiments/accent_order.py [--checkpoint runs/holdout/last.pt] [--seeds 0] [--depths 0.1 0.2 0.3]
+    python -m experiments.accent_order [--checkpoint runs/holdout/last.pt] [--seeds 0] [--depths 0.1 0.2 0.3]
 
 Issue 45 (docs/results.md, "Finishing passes", "Accent"). Each validation clip's song is danced
 whole by SGMD (genre as the style); the raw dance is finished with every pass but the accent, then
@@ -12,7 +12,6 @@ planted share and whole-body jerk of each, the real dancer's first.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +22,9 @@ from choreo.finishing import AccentConfig, accent, finish
 from choreo.metrics.whole_song import whole_song
 from choreo.pipeline import Finishing
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "scripts"))
-from evaluate_whole_songs import FPS, song_of, split_clips  # noqa: E402
+from scripts.evaluate_whole_songs import FPS, song_of, split_clips
+
+REPO = Path(__file__).resolve().parents[1]
 
 RAW = Finishing(speed_limit=False, root_path=False, pace=False, accent=False, footsteps=False, beat_lock=False)
 UP_TO_PACE = Finishing(accent=False, footsteps=False, beat_lock=False)

@@ -1,6 +1,6 @@
 """What --in-place leaves of a dance's travel and of its sway.
 
-    python scripts/experiments/in_place_sway.py dance.npz [more.npz ...]
+    python -m experiments.in_place_sway dance.npz [more.npz ...]
 
 Per file: the ground track's farthest distance from the start (choreo.motion.travel) before and
 after choreo.motion.delivery.in_place, and the share of the sway around the track (its standard

@@ -1,11 +1,11 @@
-"""The step planner's settings scored on one set of generated test windows (docs/results.md, "Feet").
+"""Footsteps' settings scored on one set of generated test windows (docs/results.md, "Feet").
 
-    python scripts/experiments/footsteps_settings.py [CHECKPOINT] [--generator graph] [--seed 0] --settings 0.06:0.25:0.04:0.6 0.12:0.3:0.04:1
+    python -m experiments.footsteps_settings [CHECKPOINT] [--generator graph] [--seed 0] --settings 0.06:0.25:0.04:0.6 0.12:0.3:0.04:1
 
 The bundled SGMD model (or CHECKPOINT) dances every M2D test window once (seed 0, DDIM 10, the
 window's genre as the style), or the bundled ChoreoGraph does (no style, as scripts/evaluate_graph.py
 scores it); the same dances are finished as `choreo generate` finishes them (speed limit,
-footsteps, beat lock, speed limit) once per setting of the step planner (trigger m : swing s :
+footsteps, beat lock, speed limit) once per setting of footsteps (trigger m : swing s :
 lift m : strength), and once without footsteps. Each row ends with the median root speed and the
 foot-root correlation per genre (real in brackets).
 """
@@ -27,7 +27,7 @@ from choreo.metrics.protocol import (TABLE_HEADER, ScoringSet, generate_window_m
                                      windows_as_dances)
 from choreo.metrics.stepping import pace_and_feet_by_genre
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:

@@ -1,6 +1,6 @@
 """How far a pace-conditioned SGMD checkpoint follows the pace it is asked for.
 
-    python scripts/experiments/pace_probe.py runs/holdout-pace-scratch/last.pt [--raw] \
+    python -m experiments.pace_probe runs/holdout-pace-scratch/last.pt [--raw] \
         [--songs DANCE_W_18 DANCE_C_2] [--paces 0.25 genre 0.8]
 
 docs/sgmd.md, "Pace". Each validation song is danced whole (seed 0, every default, the clip's genre
@@ -13,7 +13,6 @@ which lags a young run by about a thousand steps.
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 from pathlib import Path
 
@@ -22,8 +21,8 @@ import torch
 import choreo
 from choreo.datasets import load_dataset
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from evaluate_whole_songs import song_of  # noqa: E402
+from scripts.evaluate_whole_songs import song_of
+
 
 
 def raw_weights(checkpoint: Path, folder: Path) -> Path:

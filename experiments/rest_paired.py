@@ -1,6 +1,6 @@
 """A song's whole-dance figures with and without the rest pass, on one render and one seed.
 
-    python scripts/experiments/rest_paired.py EsoXLB-CPU.wav [--generator sgmd] [--styles cha-cha waltz] [--seed 0]
+    python -m experiments.rest_paired EsoXLB-CPU.wav [--generator sgmd] [--styles cha-cha waltz] [--seed 0]
 
 docs/results.md, "Finishing passes" (Rest): what standing still through a song's closing silence
 does to the whole-song figures (scripts/evaluate_whole_songs.py's).
@@ -9,14 +9,12 @@ does to the whole-song figures (scripts/evaluate_whole_songs.py's).
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-import choreo  # noqa: E402
-from choreo.music import Music  # noqa: E402
-from choreo.pipeline import Finishing  # noqa: E402
-from evaluate_whole_songs import figures  # noqa: E402
+import choreo
+from choreo.music import Music
+from choreo.pipeline import Finishing
+
+from scripts.evaluate_whole_songs import figures
 
 
 def main() -> None:

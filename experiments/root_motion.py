@@ -1,6 +1,6 @@
 """What --root-motion's root bone does on whole dances, as read back from the BVH a user gets.
 
-    python scripts/experiments/root_motion.py dance.npz [more.npz ...]
+    python -m experiments.root_motion dance.npz [more.npz ...]
 
 Per file (written with choreo.formats.write_motion(..., root_motion=True) and parsed back): the root
 bone's height against the floor the feet find (the lowest joint's median height), how far its path
