@@ -9,8 +9,9 @@ Each clip's song is cut from its audio where the dance starts, for as long as th
 once and danced through `choreo.dance` (the CLI's defaults, the clip's genre as the style unless
 --no-style) for each seed. Per song (mean over seeds): pace along the ground track, its reach
 from the start, planted, foot~root, slide, median jerk (whole body, root path, body relative to
-the pelvis), BeatAlign and the beat dip (choreo.metrics.whole_song), with the real dancer's row
-beside. Then FID_k / FID_g of the 5 s windows cut from all the whole dances (2.5 s apart), pooled
+the pelvis), BeatAlign, the beat dip and the legs (feet speed around the pelvis, ankle lift,
+pelvis speed, foot jerk; choreo.metrics.whole_song), with the real dancer's row beside. The
+classifier test against the real dancers, pooled over the Latin songs and over all. Then FID_k / FID_g of the 5 s windows cut from all the whole dances (2.5 s apart), pooled
 over songs and seeds, against the train split's windows, with 95 % bootstrap intervals over
 windows; the real dances' own windows get the same. --json writes every figure.
 
@@ -38,13 +39,15 @@ from choreo.finishing import AccentConfig, FootstepsConfig, PaceConfig, RootPath
 from choreo.metrics.beats import beat_align_score, motion_beats
 from choreo.metrics.fid import frechet_distance, motion_features, normalise_by_reference
 from choreo.metrics.protocol import SCORING_WINDOWS, scoring_windows
+from choreo.metrics.two_sample import classifier_test
 from choreo.metrics.whole_song import WholeSong, whole_song
 from choreo.music import Music
 from choreo.pipeline import Finishing
 
 REPO = Path(__file__).resolve().parents[1]
 FPS = 30.0
-COLUMNS = ("pace", "reach", "planted", "foot_root", "slide", "jerk", "root_jerk", "body_jerk", "beat_align", "beat_dip")
+COLUMNS = ("pace", "reach", "planted", "foot_root", "slide", "jerk", "root_jerk", "body_jerk", "beat_align", "beat_dip",
+           "feet_speed", "ankle_lift", "pelvis_speed", "foot_jerk")
 BOOTSTRAP = 300
 
 
@@ -159,7 +162,25 @@ def pass_configs(pairs: list[str]) -> dict:
 
 
 def mean_rows(rows: list[dict]) -> dict:
-    return {c: float(np.nanmean([r[c] for r in rows])) for c in COLUMNS}
+    """Each column's mean over rows (runs saved before a column existed: NaN)."""
+    return {c: float(np.nanmean([r.get(c, np.nan) for r in rows])) if any(c in r for r in rows) else float("nan")
+            for c in COLUMNS}
+
+
+def classifier_tests(dances: list[np.ndarray], real_dances: list[np.ndarray], genres: list[str],
+                     real_genres: list[str], groups: list[str]) -> dict:
+    """The classifier two-sample test (choreo.metrics.two_sample) against the real dancers to the
+    same songs, pooled over the Latin songs and over every song; windows grouped by song and seed."""
+    tests = {}
+    for name, keep in (("latin", lambda g: g != "waltz"), ("all", lambda g: True)):
+        mine = [i for i, g in enumerate(genres) if keep(g)]
+        theirs = [i for i, g in enumerate(real_genres) if keep(g)]
+        result = classifier_test([dances[i] for i in mine], [real_dances[i] for i in theirs], FPS,
+                                 [groups[i] for i in mine])
+        tests[name] = vars(result)
+        print(f"classifier test, {name} songs: balanced accuracy {result.accuracy:.3f} ({result.windows} windows "
+              f"against {result.reference_windows} real, {result.folds} folds)")
+    return tests
 
 
 def main() -> None:
@@ -197,11 +218,13 @@ def main() -> None:
     finishing = replace(Finishing(), **parse_pairs(args.finishing), configs=pass_configs(args.settings))
     started = time.time()
     per_song, real, dances, real_dances, log = {}, {}, [], [], {}
+    genres, real_genres, groups = [], [], []
     for clip in songs:
         music = song_of(clip)
         truth = clip.motion.joint_positions()[: len(music.features)]
         real[clip.name] = figures(truth, music)
         real_dances.append(truth)
+        real_genres.append(clip.genre)
         rows = []
         for seed in args.seeds:
             motion = choreo.dance(music, backend, style=None if args.no_style else clip.genre, seed=seed,
@@ -209,6 +232,8 @@ def main() -> None:
             positions = motion.joint_positions()
             rows.append({**figures(positions, music), "model_pace": motion.metadata.get("pace", {}).get("model")})
             dances.append(positions)
+            genres.append(clip.genre)
+            groups.append(f"{clip.name} seed {seed}")
         per_song[clip.name] = mean_rows(rows)
         log[clip.name] = {"genre": clip.genre, "real": real[clip.name], "seeds": rows}
         print(f"{clip.name}: {len(music.features) / FPS:.0f} s, {time.time() - started:.0f} s so far", flush=True)
@@ -217,11 +242,12 @@ def main() -> None:
     for who, f in (("generated", fids), ("real", real_fids)):
         print(f"{who}: {f['windows']} windows, FID_k {f['fid_k'][0]:.2f} [{f['fid_k'][1]:.2f}, {f['fid_k'][2]:.2f}], "
               f"FID_g {f['fid_g'][0]:.2f} [{f['fid_g'][1]:.2f}, {f['fid_g'][2]:.2f}]")
+    classifier = classifier_tests(dances, real_dances, genres, real_genres, groups)
     outside = {song: dance_outside(song, backend, args, options, finishing) for song in args.outside}
     if args.json:  # an outside song's file by its hash: LMMS renders a song differently each time
         heard = {song: hashlib.sha256(Path(song).read_bytes()).hexdigest() for song in args.outside}
         Path(args.json).write_text(json.dumps({"args": vars(args), "songs": log, "fid": fids, "real_fid": real_fids,
-                                               "outside": outside, "outside_sha256": heard}, indent=1, default=float))
+                                               "classifier": classifier, "outside": outside, "outside_sha256": heard}, indent=1, default=float))
 
 
 def dance_outside(song: str, backend, args, options: dict, finishing: Finishing) -> dict:

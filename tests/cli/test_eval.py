@@ -53,6 +53,11 @@ def test_eval_prints_a_table_and_writes_json(folders, tmp_path, capsys):
     assert report["ground_truth_clips"][0]["frames"] == 150  # resampled from 60 fps
     assert any("resampled from 60" in note for note in report["notes"])
     assert report["ground_truth_beat_align"] is None  # no music beside the ground truth
+    assert "ankle lift" in out and "classifier test" in out  # the legs and realism (docs/metrics.md)
+    assert set(report["legs"]) == {"feet_speed", "ankle_lift", "pelvis_speed", "foot_jerk"}
+    assert all(np.isfinite(v) and v >= 0 for v in report["legs"].values())
+    assert set(report["clips"][0]["legs"]) == set(report["legs"])
+    assert report["classifier"]["windows"] == 4 and 0.0 <= report["classifier"]["accuracy"] <= 1.0  # one 5 s window each
 
 
 def test_eval_with_music_folder_and_z_up(folders, tmp_path, capsys):

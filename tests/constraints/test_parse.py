@@ -28,8 +28,9 @@ from tests.constraints.helpers import numbered_motion
 @pytest.mark.survivor
 def test_package_exports_and_joint_sets():
     assert sorted(constraints_package.__all__) == sorted(
-        ["ALL_JOINTS", "Constraints", "JOINT_SETS", "as_smpl", "parse_frame_range", "parse_joints",
-         "parse_style_schedule", "parse_time_key", "path_to_frames", "read_pose", "read_root_path"])
+        ["ALL_JOINTS", "Constraints", "JOINT_SETS", "along_path", "as_smpl", "between_poses", "inpainting",
+         "parse_frame_range", "parse_joints", "parse_style_schedule", "parse_time_key", "path_to_frames", "read_pose",
+         "read_root_path", "seed_motion"])
     for name in constraints_package.__all__:
         assert hasattr(constraints_package, name)
     assert ALL_JOINTS == tuple(range(24))

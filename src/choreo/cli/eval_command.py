@@ -56,7 +56,8 @@ def evaluate(
     up: str = typer.Option("y", help="Up axis of .npy joint arrays and all inputs: y (ours, AIST++) or z (EDGE)."),
     json_path: Optional[Path] = typer.Option(None, "--json", help="Write every figure and per-file scores here."),
 ) -> None:
-    """Score dances with BeatAlign, PFC, FID_k, FID_g, Div_k, Div_g, the two beat distances and stepping.
+    """Score dances with BeatAlign, PFC, FID_k, FID_g, Div_k, Div_g, the two beat distances, stepping,
+    the legs and a classifier test (docs/metrics.md).
 
     FID and diversity features are normalised by the ground-truth set, as in Bailando.
     BeatAlign needs music: a song with the motion's name beside it or in --music.
@@ -126,6 +127,11 @@ def _print_report(report) -> None:
         ("planted foot, share of frames", report.planted_share, report.ground_truth_planted_share),
         ("faster foot ~ root speed (correlation)", report.foot_root_correlation, report.ground_truth_foot_root_correlation),
         ("support foot slide (m per m travelled)", report.support_slide, report.ground_truth_support_slide),
+        ("feet speed around the pelvis (m/s)", report.legs.feet_speed, report.ground_truth_legs.feet_speed),
+        ("ankle lift (m)", report.legs.ankle_lift, report.ground_truth_legs.ankle_lift),
+        ("pelvis speed (m/s)", report.legs.pelvis_speed, report.ground_truth_legs.pelvis_speed),
+        ("foot jerk (m/s^3)", report.legs.foot_jerk, report.ground_truth_legs.foot_jerk),
+        ("classifier test, balanced accuracy (0.5: indistinguishable)", report.classifier.accuracy, None),
     ]  # fmt: skip
     for name, generated, truth in rows:
         table.add_row(name, _fmt(generated), _fmt(truth))

@@ -10,8 +10,10 @@ import numpy as np
 
 from .beats import beat_align_score, beat_distances, motion_beats
 from .fid import diversity, frechet_distance, motion_features, normalise_by_reference
+from .legs import Legs, legs, mean_legs
 from .pfc import foot_contact_score, PFC_SCALE
 from .stepping import Stepping, pooled, stepping
+from .two_sample import TwoSample, classifier_test
 
 
 @dataclass
@@ -33,6 +35,7 @@ class DanceScore:
     motion_to_music: float | None  # ChoreoGraph's mean squared beat distances, frames^2
     music_to_motion: float | None
     stepping: Stepping  # planted feet, feet against the root, the supporting foot's slide (stepping.py)
+    legs: Legs  # feet around the pelvis, ankle lift, pelvis speed, foot jerk (legs.py)
 
 
 @dataclass
@@ -59,6 +62,9 @@ class EvaluationReport:
     ground_truth_planted_share: float
     ground_truth_foot_root_correlation: float
     ground_truth_support_slide: float
+    legs: Legs  # the mean over clips of each legs figure (legs.py)
+    ground_truth_legs: Legs
+    classifier: TwoSample  # how well a logistic regression tells the generated windows from the ground truth's
     clips: list[DanceScore] = field(default_factory=list)
     ground_truth_clips: list[DanceScore] = field(default_factory=list)
 
@@ -73,7 +79,8 @@ def score_dance(dance: Dance, fps: float) -> DanceScore:
         align = beat_align_score(dance.music_beats, beats)
         m2m, music2m = beat_distances(dance.music_beats, beats)
     return DanceScore(dance.name, len(dance.positions), len(dance.positions) / fps, align,
-                      foot_contact_score(dance.positions) * PFC_SCALE, m2m, music2m, stepping(dance.positions, fps))
+                      foot_contact_score(dance.positions) * PFC_SCALE, m2m, music2m, stepping(dance.positions, fps),
+                      legs(dance.positions, fps))
 
 
 def _mean_of(values) -> float | None:
@@ -112,6 +119,8 @@ def evaluate(generated: Sequence[Dance], ground_truth: Sequence[Dance], fps: flo
         planted_share=steps[0], foot_root_correlation=steps[1], support_slide=steps[2],
         ground_truth_planted_share=truth_steps[0], ground_truth_foot_root_correlation=truth_steps[1],
         ground_truth_support_slide=truth_steps[2],
+        legs=mean_legs([s.legs for s in scores]), ground_truth_legs=mean_legs([s.legs for s in truth_scores]),
+        classifier=classifier_test([d.positions for d in generated], [d.positions for d in ground_truth], fps),
         clips=scores, ground_truth_clips=truth_scores,
     )  # fmt: skip
 

@@ -9,6 +9,7 @@ floor or wobbles along its path; these can (joint positions in metres, Y up).
   alone and the body relative to the pelvis (where the jitter lives).
 - beat dip: 1 - (mean joint speed at the motion beats) / (the peak speed between two beats), the
   median over beats: 1 is a dancer who stops dead on every beat, 0 one whose beats do not show.
+- the legs: feet speed around the pelvis, ankle lift, pelvis speed and foot jerk (legs.py).
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ import numpy as np
 
 from ..motion.beats import smoothed_speed, speed_minima
 from ..motion.travel import ground_track, track_pace, track_reach
+from .legs import legs
 from .stepping import stepping
-
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,10 @@ class WholeSong:
     root_jerk: float  # the root joint alone
     body_jerk: float  # every joint but the root, relative to the root
     beat_dip: float
+    feet_speed: float  # m/s, ankles and toes around the pelvis (legs.py)
+    ankle_lift: float  # m
+    pelvis_speed: float  # m/s
+    foot_jerk: float  # m/s^3
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -72,4 +77,4 @@ def whole_song(positions: np.ndarray, fps: float) -> WholeSong:
     track = ground_track(np.asarray(positions)[:, 0], fps)
     return WholeSong(len(positions) / fps, track_pace(track, fps), track_reach(track), steps.planted_share,
                      steps.foot_root_correlation, steps.support_slide, jerk, root_jerk, body_jerk,
-                     beat_dip(positions))
+                     beat_dip(positions), *legs(positions, fps).to_dict().values())
