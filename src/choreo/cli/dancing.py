@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING, Any, Callable, Optional
 
 import typer
 
+from ..finishing import Finishing
 from ..generator.base import MAX_SEED
-from ..pipeline import Finishing
 from .flags import flag_parameters, given_values, with_parameters
 from .numbers import Number
 from .progress import progress_bar, stderr_console
