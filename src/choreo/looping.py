@@ -155,8 +155,8 @@ def closed(motion: Motion, frames: int) -> Motion:
 def stepping_into(motion: Motion, bent: Motion, frames: int) -> Motion:
     """``bent`` (``motion`` with its end bent) with each ankle's share of the bend taken while that
     foot moves in ``motion``, in proportion to its speed, not evenly over the frames: a bend over
-    a standing foot would slide it. The legs reach the ankles by two-bone IK (choreo.finishing.footsteps)."""
-    from .finishing.footsteps import LEGS, legs_reaching
+    a standing foot would slide it. The legs reach the ankles by two-bone IK (choreo.skeleton.legs)."""
+    from .skeleton.legs import LEGS, legs_reaching
 
     frames = min(frames, motion.num_frames - 1)
     if frames < 2:
