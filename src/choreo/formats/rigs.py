@@ -35,7 +35,8 @@ import numpy as np
 from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
 from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion
-from .bvh import END_SITES, UNIT_SCALE, _local_rotations, above, detect_scale, in_world, read_bvh_raw, write_tree
+from .bvh import UNIT_SCALE, _local_rotations, above, detect_scale, in_world, read_bvh_raw, write_tree
+from .joints import END_SITES
 
 LENGTHS = ("motion", "rig")
 
