@@ -203,7 +203,7 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
     companions = {}
     if outputs.preview and written:  # the video joins the motions' all or nothing
         from ..render import RenderConfig
-        from .render_command import render_preview
+        from .preview import render_preview
 
         video = str(Path(written[0]).with_suffix(".mp4"))
         companions[video] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
