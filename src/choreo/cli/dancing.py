@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING, Any, Callable, Optional
 
 import typer
 
+from ..finishing import Finishing
 from ..generator.base import MAX_SEED
-from ..pipeline import Finishing
 from .flags import flag_parameters, given_values, with_parameters
 from .numbers import Number
 from .progress import progress_bar, stderr_console
@@ -213,7 +213,7 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
     companions = {}
     if outputs.preview_path:  # the video joins the motions' all or nothing
         from ..render import RenderConfig
-        from .render_command import render_preview
+        from .preview import render_preview
 
         companions[outputs.preview_path] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
     write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.rig, companions=companions,
