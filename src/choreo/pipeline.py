@@ -1,4 +1,6 @@
-"""A song in, a finished dance out: the one road every command, script and benchmark takes.
+"""A song in, a finished dance out: what every dancing command and ``choreo.dance`` run. (The
+window-scoring protocol, the repertoire build and experiments call a backend and
+``choreo.finishing.finish`` apart, to score or vary one stage.)
 
     import choreo
     motion = choreo.dance("song.mp3", style="waltz", seed=3)

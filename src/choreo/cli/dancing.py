@@ -1,5 +1,5 @@
 """What the dancing commands share: their options, declared here once, the request they build
-from them (``choreo.pipeline.DanceRequest``: the one road to a dance) and the writing of each
+from them (``choreo.pipeline.DanceRequest``, which ``choreo.dance`` builds too) and the writing of each
 song's dance. The CLI only parses, checks output paths before any work, and prints."""
 
 from __future__ import annotations

@@ -1,9 +1,10 @@
 """Passes every generated dance goes through after its backend: speed limit (no joint faster
 than real dancers move), root path (travel without wobble), pace (a whole song's travel at its
 genre's pace), accent (motion beats as pronounced as real dancers'), footsteps (feet that stand
-and step instead of gliding), beat lock (re-timing onto the music's beats) and, when asked, foot
-lock (planted feet carry the body). Each pass has a
-module, a function and a config of one name; ``Finishing`` (choreo.finishing.settings) turns them on and off."""
+and step instead of gliding), beat lock (re-timing onto the music's beats), rest (still through
+the silence before and after the music) and, when asked, foot lock (planted feet carry the
+body). Each pass has a module, a function and a config of one name; ``Finishing``
+(choreo.finishing.settings) turns them on and off."""
 
 from __future__ import annotations
 
