@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 from choreo.formats import read_motion
-from choreo.looping import seam
+from choreo.metrics.loops import seam
 from choreo.metrics.stepping import foot_speeds
 
 

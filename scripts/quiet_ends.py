@@ -21,7 +21,7 @@ from outside_songs import outside_songs  # noqa: E402
 
 import choreo  # noqa: E402
 from choreo.motion.beats import mean_joint_speed  # noqa: E402
-from choreo.finishing.footsteps import LEGS  # noqa: E402
+from choreo.skeleton.legs import LEGS  # noqa: E402
 from choreo.music import Music  # noqa: E402
 
 ANKLES = [leg[2] for leg in LEGS]  # the left and the right ankle, as footsteps (choreo.finishing.footsteps) names them

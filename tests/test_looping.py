@@ -5,8 +5,11 @@ import pytest
 
 import choreo
 from choreo.errors import ParameterError
-from choreo.looping import Loop, bent_into, delivered_loop, next_cycle, seam
+from choreo.looping import Loop
+from choreo.metrics.loops import seam
 from choreo.motion import Motion
+from choreo.motion.delivery import delivered_loop
+from choreo.motion.seam import bent_into, next_cycle
 from choreo.music import Music
 
 SONG = "examples/drum_and_bass_174bpm.wav"

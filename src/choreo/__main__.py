@@ -2,6 +2,8 @@
 
 import sys
 
-from .cli import main
+from .cli import ignore_signals_at_exit, main
 
-sys.exit(main())
+code = main()
+ignore_signals_at_exit()
+sys.exit(code)

@@ -43,6 +43,36 @@ def check_output_dir(path: str | os.PathLike) -> Path:
     return path
 
 
+def check_outputs_apart(outputs: list[str | os.PathLike], inputs: list[str | os.PathLike]) -> None:
+    """Refuse, before any work, an output that is also an input (the song, a motion or beat file:
+    written over, the user's only copy would be lost) or two outputs that are one file. Files are
+    compared by device and inode, so a link or another name for the same file counts; an output
+    that does not exist yet is compared by the path it will have."""
+    from .errors import ParameterError
+
+    read = {_identity(path): path for path in inputs if path is not None and Path(path).exists()}
+    written: dict[tuple, str | os.PathLike] = {}
+    for path in outputs:
+        if str(path) == STDOUT:
+            continue
+        identity = _identity(output_target(path))
+        if identity in read:
+            raise ParameterError(f"output {path} is also an input ({read[identity]}): it would be written over")
+        if identity in written:
+            raise ParameterError(f"outputs {written[identity]} and {path} are one file")
+        written[identity] = path
+
+
+def _identity(path: str | os.PathLike) -> tuple:
+    """(device, inode) of a file that exists (links followed); else its absolute path, folders resolved."""
+    try:
+        status = os.stat(path)
+        return status.st_dev, status.st_ino
+    except OSError:
+        path = Path(path)
+        return (str(path.parent.resolve() / path.name),)
+
+
 def check_output_folder(path: str | os.PathLike) -> Path:
     """Fail early, with one line, if ``path`` cannot be (made) a folder of outputs: something else is
     there, or the nearest folder that exists on the way to it is not writable. Creates nothing."""
@@ -54,6 +84,17 @@ def check_output_folder(path: str | os.PathLike) -> Path:
             if not os.access(folder, os.W_OK):
                 raise OutputError(f"cannot write to {path}: folder {folder} is not writable")
             break
+    return path
+
+
+def make_output_folder(path: str | os.PathLike) -> Path:
+    """``path`` as a folder of outputs, created with its parents where missing (as ``mkdir -p``);
+    one line (exit 3) where it cannot be."""
+    path = check_output_folder(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise OutputError(f"cannot write to {path}: {error.strerror}") from None
     return path
 
 

@@ -13,8 +13,8 @@ in-betweens into them, the graph's guided walk picks the way back to its first n
 finishing passes run over the loop with its end before it and its opening after it, as an
 endless loop plays it, so steps and beats carry on across the seam (the re-timing leaves the
 seam's frames at their times); what the seam is then off by, in pose and in velocity, is closed
-over the last half second by a smooth displacement (:func:`bent_into`), each foot taking its share
-while it moves (:func:`stepping_into`).
+over the last half second by a smooth displacement, each foot taking its share while it moves
+(choreo.motion.seam).
 """
 
 from __future__ import annotations
@@ -26,14 +26,13 @@ import numpy as np
 from .errors import ParameterError
 from .motion import Motion
 from .motion.filters import low_pass
+from .motion.seam import CLOSING_SECONDS, bent_into, closed
 from .motion.stitch import facing_yaw, rotate_about_y, turned_and_moved
 from .motion.travel import TRACK_CUTOFF_HZ, ground_track
-from .skeleton import axis_angle_to_quaternion, quaternion_conjugate, quaternion_multiply, quaternion_to_axis_angle
 
 RETURN_SECONDS = 0.25  # the opening given again after the end: a pose and its motion, a few model frames
 AFTER_SECONDS = 1.0  # the opening's music danced past the loop's end: 4 s made SGMD's return slide more (docs/results.md)
 LEAD_IN_SECONDS = 4.0  # the loop's end danced before its opening, as it will be in a loop: the opening is mid-dance
-CLOSING_SECONDS = 0.5  # the end of the loop bent into the next cycle's opening, pose and velocity
 BEATS_PER_BAR, WALTZ_BEATS_PER_BAR = 4, 3
 
 
@@ -143,106 +142,3 @@ class Loop:
                 "turn_degrees": float(np.degrees(angle)), "travel_m": [float(offset[0]), float(offset[2])]}
         own = motion.slice_frames(self.span.start, self.span.stop).replace(metadata=dict(motion.metadata, loop=loop))
         return closed(own, int(round(CLOSING_SECONDS * motion.fps)))
-
-
-def closed(motion: Motion, frames: int) -> Motion:
-    """A looped ``motion`` that runs into its next cycle (:func:`next_cycle`) as into its own next
-    frame: its last ``frames`` bent by :func:`bent_into`, each ankle then moved while its foot
-    moves (:func:`stepping_into`)."""
-    return stepping_into(motion, bent_into(motion, next_cycle(motion, 2), motion.num_frames, frames), frames)
-
-
-def stepping_into(motion: Motion, bent: Motion, frames: int) -> Motion:
-    """``bent`` (``motion`` with its end bent) with each ankle's share of the bend taken while that
-    foot moves in ``motion``, in proportion to its speed, not evenly over the frames: a bend over
-    a standing foot would slide it. The legs reach the ankles by two-bone IK (choreo.finishing.footsteps)."""
-    from .finishing.footsteps import LEGS, legs_reaching
-
-    frames = min(frames, motion.num_frames - 1)
-    if frames < 2:
-        return bent
-    tail = slice(motion.num_frames - frames, motion.num_frames)
-    ankles = [leg[2] for leg in LEGS]
-    before = motion.slice_frames(tail.start - 1).joint_positions()[:, ankles]  # one frame before, for speeds
-    after = bent.slice_frames(tail.start).joint_positions()
-    moved = after[:, ankles] - before[1:]  # what the bend did to each ankle
-    speed = np.linalg.norm(np.diff(before, axis=0), axis=-1)  # (frames, 2)
-    share = np.cumsum(speed, axis=0) / np.maximum(speed.sum(axis=0), 1e-9)
-    share = np.where(speed.sum(axis=0) > 1e-6, share, np.linspace(1 / frames, 1, frames)[:, None])
-    targets = before[1:] + share[..., None] * moved[-1]
-    rotations = bent.rotations.copy()
-    rotations[tail] = legs_reaching(bent.rotations[tail], after, targets, bent.skeleton.parents)
-    return bent.replace(rotations=rotations, metadata=dict(bent.metadata))
-
-
-def bent_into(motion: Motion, after: Motion, end: int, frames: int) -> Motion:
-    """``motion`` with the ``frames`` before frame ``end`` bent so that they run into ``after``'s
-    two frames as into their own next ones: the extrapolated pose and the velocity at ``end``
-    meet them. The bend is a cubic (Hermite) displacement, zero and flat where it starts, on the
-    root's position and on each joint's rotation (in its own frame); frames from ``end`` on stay."""
-    frames = min(frames, end - 2)
-    if frames < 2:
-        return motion
-    root, rotations = motion.root_positions.copy(), motion.rotations.copy()
-    last, before = end - 1, end - 2
-    step = root[last] - root[before]
-    root_error = (after.root_positions[0] - (root[last] + step), after.root_positions[1] - after.root_positions[0] - step)
-    turn = quaternion_multiply(quaternion_conjugate(rotations[before]), rotations[last])  # each joint's last step
-    ahead = quaternion_multiply(rotations[last], turn)
-    turn_after = quaternion_multiply(quaternion_conjugate(after.rotations[0]), after.rotations[1])
-    rotation_error = (quaternion_to_axis_angle(quaternion_multiply(quaternion_conjugate(ahead), after.rotations[0])),
-                      quaternion_to_axis_angle(quaternion_multiply(quaternion_conjugate(turn), turn_after)))
-    s = np.arange(frames) / frames  # 0 where the bend starts; 1 would be ``after``'s first frame
-    reach, slope = 3 * s**2 - 2 * s**3, (s**3 - s**2) * frames  # Hermite: value and slope at the end
-    tail = slice(end - frames, end)
-    root[tail] += reach[:, None] * root_error[0] + slope[:, None] * root_error[1]
-    bend = reach[:, None, None] * rotation_error[0] + slope[:, None, None] * rotation_error[1]
-    rotations[tail] = quaternion_multiply(rotations[tail], axis_angle_to_quaternion(bend))
-    return motion.replace(root_positions=root, rotations=rotations, metadata=dict(motion.metadata))
-
-
-def delivered_loop(motion: Motion, fps: float | None = None, without_travel: bool = False) -> Motion:
-    """A loop in place (its per-cycle travel then only the turn about where it started) and at
-    ``fps``, still a loop: resampled over whole cycles, so ``fps`` times its length, rounded,
-    frames play one cycle (its tempo off by under half a frame per cycle), then closed again."""
-    from .motion.delivery import ALIASING_MARGIN, in_place, low_passed
-
-    changed = without_travel or (fps is not None and not np.isclose(fps, motion.fps))
-    if without_travel:
-        track = ground_track(motion.root_positions, motion.fps)[0]  # in place keeps the track's start
-        start = np.array([track[0], 0.0, track[1]])
-        motion = in_place(motion)
-        travel = start - rotate_about_y(start, np.radians(motion.metadata["loop"]["turn_degrees"]))
-        motion.metadata = dict(motion.metadata, loop=dict(motion.metadata["loop"], travel_m=[travel[0], travel[2]]))
-    if fps is not None and not np.isclose(fps, motion.fps):
-        count = max(2, int(round(motion.num_frames * fps / motion.fps)))
-        around = Motion.concatenate([motion, next_cycle(motion, 1)])
-        around = low_passed(around, ALIASING_MARGIN * fps / 2) if fps < motion.fps else around
-        loop = dict(motion.metadata["loop"], seconds=round(count / fps, 4))
-        motion = around.sample_frames(np.arange(count) * motion.num_frames / count).replace(
-            fps=float(fps), metadata=dict(motion.metadata, loop=loop))
-    return closed(motion, int(round(CLOSING_SECONDS * motion.fps))) if changed else motion
-
-
-def next_cycle(motion: Motion, frames: int = 1) -> Motion:
-    """The first ``frames`` of a looped ``motion`` as they come again after its end: turned and
-    moved by the per-cycle turn and travel its metadata carries."""
-    loop = motion.metadata["loop"]
-    travel = loop["travel_m"]
-    return turned_and_moved(motion.slice_frames(0, frames), np.radians(loop["turn_degrees"]),
-                            np.array([travel[0], 0.0, travel[1]]))
-
-
-def seam(motion: Motion) -> tuple[float, float]:
-    """How a loop's seam compares with its own frame steps, played over and over: (the step from its
-    last frame into the next cycle's first, the larger change of velocity there), each over the
-    95th percentile of the same figure inside the dance; joints' moves averaged, in metres."""
-    positions = Motion.concatenate([motion, next_cycle(motion, 2)]).joint_positions()
-    moves = np.diff(positions, axis=0)
-    steps = np.linalg.norm(moves, axis=-1).mean(axis=1)
-    changes = np.linalg.norm(np.diff(moves, axis=0), axis=-1).mean(axis=1)
-    last = motion.num_frames - 1  # the step from the last frame into the next cycle
-    inside = np.delete(steps, last)
-    inside_changes = np.delete(changes, [last - 1, last])
-    return (float(steps[last] / np.percentile(inside, 95)),
-            float(max(changes[last - 1], changes[last]) / np.percentile(inside_changes, 95)))

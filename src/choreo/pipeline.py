@@ -1,4 +1,6 @@
-"""A song in, a finished dance out: the one road every command, script and benchmark takes.
+"""A song in, a finished dance out: what every dancing command and ``choreo.dance`` run. (The
+window-scoring protocol, the repertoire build and experiments call a backend and
+``choreo.finishing.finish`` apart, to score or vary one stage.)
 
     import choreo
     motion = choreo.dance("song.mp3", style="waltz", seed=3)
@@ -6,11 +8,12 @@
 
 A :class:`DanceRequest` is everything but the song, checked when it is made, before any song is
 read. Its :meth:`~DanceRequest.dance` analyses a song, builds the constraints against its frames,
-lets the backend dance and finishes the dance (:class:`Finishing`, choreo.finishing). The dancing
-commands build one request and dance every song with it; ``choreo.dance`` builds one per call.
-Writing files is the caller's business (``choreo.formats``). The beats are the tracker's unless
-the caller knows them (``bpm=128``, ``beats="beats.csv"``; choreo.music.beat_source); the dance's
-metadata says which (``"beats"``).
+lets the backend dance and finishes the dance (:class:`Finishing`, choreo.finishing; re-exported
+here, so ``choreo.pipeline.Finishing`` still imports). The dancing commands build one request and
+dance every song with it; ``choreo.dance`` builds one per call. Writing files is the caller's
+business (``choreo.formats``). The beats are the tracker's unless the caller knows them
+(``bpm=128``, ``beats="beats.csv"``; choreo.music.beat_source); the dance's metadata says which
+(``"beats"``).
 """
 
 from __future__ import annotations
@@ -21,8 +24,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping, Union
 
 from .errors import ParameterError
+from .finishing import Finishing  # re-exported: choreo.pipeline.Finishing stays importable
 from .generator.base import check_seed
-from .generator.options import option
 
 if TYPE_CHECKING:
     from .constraints import Constraints
@@ -31,23 +34,6 @@ if TYPE_CHECKING:
     from .music import BeatSource, Music
 
 ConstraintsFor = Callable[["Music"], "Constraints | None"]  # built once the song's frames are known
-
-
-@dataclass(frozen=True, kw_only=True)
-class Finishing:
-    """The passes every dance goes through after its backend (choreo.finishing.finish runs them;
-    why each is on or off by default: docs/results.md, "Finishing passes")."""
-
-    speed_limit: bool = option(True, "Spread turns and dashes faster than real dancers move over the frames around them.")
-    root_path: bool = option(True, "Smooth the root's travel on the floor, removing its wobble (given frames stay).")
-    pace: bool = option(True, "Bring a whole song's travel toward the real pace of its genre (short dances keep theirs).")
-    accent: bool = option(True, "Ease into and out of each motion beat, marking it as clearly as real dancers do.")
-    footsteps: bool = option(True, "Plan steps: each foot stands until the body leaves it, then steps (legs by IK).")
-    beat_lock: bool = option(True, "Re-time the dance so its motion beats land on the music's beats (given frames stay).")
-    rest: bool = option(True, "Wait through a song's opening silence and come to rest in its closing silence.")
-    foot_lock: bool = option(False, "Let planted feet carry the body instead of sliding (docs/results.md, \"Feet\").")
-    # A pass's settings by its name, e.g. {"footsteps": FootstepsConfig(strength=0.8)}; absent: its defaults.
-    configs: Mapping[str, Any] = field(default_factory=dict)
 
 
 class Backend:

@@ -94,8 +94,9 @@ def test_batch_contract(tmp_path, capsys):
     out.mkdir()
     code, _, err = run_cli(capsys, "generate", tmp_path / "a" / "song.wav", tmp_path / "b" / "song.wav", "--out-dir", out)
     assert code == 2 and "more than once" in err and list(out.iterdir()) == []
-    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "--out-dir", tmp_path / "missing")
-    assert code == 3  # like -o into a missing folder
+    (tmp_path / "a file").write_bytes(b"x")
+    code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "--out-dir", tmp_path / "a file" / "deeper")
+    assert code == 3 and "not a folder" in err  # something else is there
     code, _, err = run_cli(capsys, "generate", EXAMPLE_SONG, "-o", tmp_path / "x.bvh", "--generator", "nope")
     assert code == 2 and "not available" in err
 

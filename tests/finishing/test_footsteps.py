@@ -5,12 +5,13 @@ import pytest
 
 from choreo.errors import ParameterError
 from choreo.finishing import finish
-from choreo.finishing.footsteps import (DEFAULT_STRENGTH, GENRE_STRENGTH, HORIZONTAL, LEGS, FootstepsConfig, footsteps,
+from choreo.finishing.footsteps import (DEFAULT_STRENGTH, GENRE_STRENGTH, HORIZONTAL, FootstepsConfig, footsteps,
                                         plan_steps)
 from choreo.metrics.stepping import stepping
 from choreo.motion import Motion
 from choreo.motion.filters import fixed_weights
 from choreo.pipeline import Finishing
+from choreo.skeleton.legs import LEGS
 
 FPS = 30.0
 

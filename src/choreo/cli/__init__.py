@@ -13,6 +13,7 @@ import warnings
 from ..threads import bound_omp_threads
 from .app import app
 from .interrupts import signals_raise
+from .streams import standard_streams
 from .text import plain
 
 
@@ -22,7 +23,7 @@ def main(argv: list[str] | None = None) -> int:
     SIGINT and SIGTERM unwind the command as exceptions (see :mod:`.interrupts`), so outputs and
     children are cleaned up; the exit code is then the shell's 128 + signal (130, 143)."""
     bound_omp_threads()  # before torch loads
-    with signals_raise() as received:
+    with standard_streams(), signals_raise() as received:
         try:
             code = _run(argv)
         except KeyboardInterrupt:  # past typer's reach, e.g. while an error was being printed
@@ -45,6 +46,7 @@ def _run(argv: list[str] | None) -> int:
                 warnings.filterwarnings("ignore", category=RuntimeWarning)
             warnings.showwarning = _show_warning(warnings.showwarning)
             code = app(args=argv, prog_name="choreo", standalone_mode=False)  # typer: Ctrl-C is 130
+            sys.stdout.flush()  # what print() buffered: a full disk shows only now
     except ChoreoError as error:
         _print_error(str(error))
         return error.exit_code
@@ -95,7 +97,18 @@ def _print_error(message: str) -> None:
 
 
 def run() -> None:  # pragma: no cover - console script
-    sys.exit(main())
+    code = main()
+    ignore_signals_at_exit()
+    sys.exit(code)
 
 
-__all__ = ["app", "main", "run"]
+def ignore_signals_at_exit() -> None:
+    """The command is over: a Ctrl-C or SIGTERM now, while Python shuts down, would raise inside
+    its exit handlers and print their traceback (11 lines) over a dance already written."""
+    import signal
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_IGN)
+
+
+__all__ = ["app", "ignore_signals_at_exit", "main", "run"]

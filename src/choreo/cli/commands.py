@@ -114,6 +114,7 @@ def convert(
       choreo convert dance.bvh dance.fbx --rig mixamo --root-motion  # Unreal's root motion
     """
     from ..formats import check_output_format, read_motion, write_motion
+    from ..fileio import check_outputs_apart
     from ..formats.registry import dropped_metadata
     from ..motion.delivery import check_fps, check_travel, delivered
 
@@ -121,6 +122,7 @@ def convert(
         check_fps(fps)  # the range every command takes, before resampling allocates the frames
     check_travel(in_place, root_motion)
     check_output_format(target, format, rig, root_motion)  # a bad target or rig refused before reading anything
+    check_outputs_apart([target], [source])
     motion = read_motion(_require_file(source))
     motion = delivered(motion, fps, in_place)
     written = write_motion(motion, target, format=format, rig=rig, root_motion=root_motion)

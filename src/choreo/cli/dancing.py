@@ -1,5 +1,5 @@
 """What the dancing commands share: their options, declared here once, the request they build
-from them (``choreo.pipeline.DanceRequest``: the one road to a dance) and the writing of each
+from them (``choreo.pipeline.DanceRequest``, which ``choreo.dance`` builds too) and the writing of each
 song's dance. The CLI only parses, checks output paths before any work, and prints."""
 
 from __future__ import annotations
@@ -7,14 +7,14 @@ from __future__ import annotations
 import functools
 import inspect
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
 import typer
 
+from ..finishing import Finishing
 from ..generator.base import MAX_SEED
-from ..pipeline import Finishing
 from .flags import flag_parameters, given_values, with_parameters
 from .numbers import Number
 from .progress import progress_bar, stderr_console
@@ -91,9 +91,11 @@ class DanceFlags:
             check_fps(self.fps)
         check_travel(self.in_place, self.root_motion)
 
-    def outputs(self, paths: list[str], preview: bool = False, format: bool = True, fps: float | None = None) -> "Outputs":
+    def outputs(self, paths: list[str], preview: bool = False, format: bool = True, fps: float | None = None,
+                inputs: tuple = ()) -> "Outputs":
         """Where and how a song's dance is written (``format``: --format names one file's format;
-        ``fps``: the rate of the motion the dance continues or edits, which --fps overrides)."""
+        ``fps``: the rate of the motion the dance continues or edits, which --fps overrides;
+        ``inputs``: the files it reads besides the song, none of which it may write over)."""
         from ..errors import ParameterError
         from ..motion.delivery import MAX_DELIVERY_FPS, MIN_DELIVERY_FPS
 
@@ -102,7 +104,7 @@ class DanceFlags:
                                  f"{MAX_DELIVERY_FPS:g}) for the dance")
         return Outputs(paths=paths, format=self.format if format else None, rig=self.rig, preview=preview,
                        fps=self.fps if self.fps is not None else fps, in_place=self.in_place,
-                       root_motion=self.root_motion)
+                       root_motion=self.root_motion, inputs=[*inputs, self.beats, self.checkpoint])
 
     def request(self, constrained: bool = False, loop: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not
@@ -167,11 +169,18 @@ class Outputs:
     fps: float | None = None  # written at this frame rate (choreo.motion.delivery.at_fps)
     in_place: bool = False  # written without the travel (choreo.motion.delivery.in_place)
     root_motion: bool = False  # written under a root bone (choreo.motion.delivery.with_root_bone)
+    inputs: list = field(default_factory=list)  # files read besides the song (None: not given)
 
-    def check(self) -> None:
-        """Every output checked before any work or any file: a writable folder, a known format."""
+    @property
+    def preview_path(self) -> str | None:
+        written = [path for path in self.paths if path != "-"]
+        return str(Path(written[0]).with_suffix(".mp4")) if self.preview and written else None
+
+    def check(self, song: Path | None = None) -> None:
+        """Every output checked before any work or any file: a writable folder, a known format, and
+        none of them an input (``song`` or ``inputs``) or another of them."""
         from ..errors import ParameterError
-        from ..fileio import output_target
+        from ..fileio import check_outputs_apart, output_target
         from ..formats import check_output_format
 
         if self.paths.count("-") > 1 or (len(self.paths) > 1 and self.format):
@@ -180,6 +189,7 @@ class Outputs:
             if path != "-":
                 output_target(path)  # a writable folder, and nothing there that is not a regular file
             check_output_format(path, self.format, self.rig, self.root_motion)
+        check_outputs_apart(self.paths + [self.preview_path] * bool(self.preview_path), [song, *self.inputs])
 
 
 def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints: Callable | None = None) -> dict:
@@ -187,7 +197,7 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
     from ..formats import write_motions
     from ..motion.delivery import delivered
 
-    outputs.check()
+    outputs.check(song)
     with progress_bar(f"analysing {song.name}") as update:
         music = request.analyse(song, progress=lambda done, total: update(round(done), round(total)))
     fixed = constraints(music) if constraints else None
@@ -201,12 +211,11 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
         stderr_console.print(f"[yellow]note:[/yellow] {markup(meta['style_notice'])}", highlight=False)
     written = [path for path in outputs.paths if path != "-"]
     companions = {}
-    if outputs.preview and written:  # the video joins the motions' all or nothing
+    if outputs.preview_path:  # the video joins the motions' all or nothing
         from ..render import RenderConfig
-        from .render_command import render_preview
+        from .preview import render_preview
 
-        video = str(Path(written[0]).with_suffix(".mp4"))
-        companions[video] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
+        companions[outputs.preview_path] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
     write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.rig, companions=companions,
                   root_motion=outputs.root_motion)
     written += list(companions)

@@ -59,8 +59,8 @@ def generate(
 
     from collections import Counter
 
-    from ..errors import ChoreoError, OutputError, ParameterError
-    from ..fileio import json_safe
+    from ..errors import ChoreoError, ParameterError
+    from ..fileio import json_safe, make_output_folder
     from .batch import Shard, already_written, batch_formats
 
     if output is not None and out_dir is not None:
@@ -73,12 +73,11 @@ def generate(
         raise ParameterError(f"{len(songs)} songs need --out-dir, not -o")
     if out_dir is not None:
         formats = batch_formats(dance.format, dance.rig)
-        if not out_dir.is_dir():
-            raise OutputError(f"--out-dir {out_dir} is not a folder")  # an output that cannot be written: 3
         stems = Counter(song.stem for song in songs)
         clashes = sorted(stem for stem, count in stems.items() if count > 1)
         if clashes:
             raise ParameterError(f"songs named {clashes[0]!r} more than once would write the same files in --out-dir")
+        make_output_folder(out_dir)  # with its parents, as mkdir -p; something else there: exit 3
     elif shard is not None or skip_existing:
         raise ParameterError("--shard and --skip-existing split a batch: use them with --out-dir")
     if shard is not None:
@@ -87,8 +86,9 @@ def generate(
 
     def outputs_for(song: Path):
         if output is not None:
-            return dance.outputs(list(output), preview, fps=fps)
-        return dance.outputs([str(out_dir / f"{song.stem}.{ext}") for ext in formats], preview, format=False, fps=fps)
+            return dance.outputs(list(output), preview, fps=fps, inputs=(seed_motion,))
+        return dance.outputs([str(out_dir / f"{song.stem}.{ext}") for ext in formats], preview, format=False, fps=fps,
+                             inputs=(seed_motion, *songs))
 
     def done_before(song: Path) -> bool:
         files = outputs_for(song).paths
@@ -136,15 +136,17 @@ def inbetween(
       choreo inbetween song.mp3 --start a.bvh@-1 --key 4.0=pose.bvh --key 8.5=take2.npz@30 -o dance.bvh --style rumba
     """
     from ..constraints import between_poses, parse_time_key, read_pose
+    from ..constraints.parse import pose_file
     from ..errors import ParameterError
 
     if start is None and end is None and not key:
         raise ParameterError("give at least one of --start, --end or --key")
     request = dance.request(constrained=True)
-    keys = [(seconds, read_pose(spec)) for seconds, spec in map(parse_time_key, key)]
+    timed = [parse_time_key(k) for k in key]
     poses = partial(between_poses, start=read_pose(start) if start else None, end=read_pose(end) if end else None,
-                    keys=keys)
-    dance_one(request, song, dance.outputs(output), poses)
+                    keys=[(seconds, read_pose(spec)) for seconds, spec in timed])
+    files = tuple(pose_file(spec)[0] for spec in [start, end, *(spec for _, spec in timed)] if spec)
+    dance_one(request, song, dance.outputs(output, inputs=files), poses)
 
 
 @dancing_command("sgmd")
@@ -168,7 +170,7 @@ def inpaint(
     given = read_input_motion(motion)
     region = parse_frame_range(frames, given.num_frames) if frames else None
     edit = partial(inpainting, motion=given, frames=region, joints=parse_joints(joints))
-    dance_one(request, song, dance.outputs(output, fps=given.fps), edit)
+    dance_one(request, song, dance.outputs(output, fps=given.fps, inputs=(motion,)), edit)
 
 
 @dancing_command("sgmd")
@@ -185,7 +187,7 @@ def trajectory(
     """
     from ..constraints import along_path
 
-    dance_one(dance.request(constrained=True), song, dance.outputs(output), partial(along_path, path=path))
+    dance_one(dance.request(constrained=True), song, dance.outputs(output, inputs=(path,)), partial(along_path, path=path))
 
 
 def read_input_motion(path: Path):

@@ -12,7 +12,8 @@ SIZE = re.compile(r"\s*([0-9]{1,9})\s*[xX]\s*([0-9]{1,9})\s*")  # ASCII digits: 
 
 from ..numbers import shown
 from .numbers import Number
-from .progress import progress_bar, stderr_console
+from .preview import render_preview
+from .progress import stderr_console
 from .text import markup
 
 
@@ -67,13 +68,6 @@ def render_config(size: str, fps: float | None, strip: int):
     side = Number("--size", MIN_SIDE, MAX_SIDE, whole=True)  # each side, before a frame is allocated
     return RenderConfig(width=side(match[1]), height=side(match[2]), fps=fps,
                         strip_frames=Number("--strip", 1, MAX_STRIP, whole=True)(str(strip)))
-
-
-def render_preview(motion, output: Path, config, music: Path | None) -> None:
-    from ..render import render_motion
-
-    with progress_bar(f"rendering {output.name}") as update:
-        render_motion(motion, output, config, music, progress=lambda done, total: update(done, total))
 
 
 def render_html(motion, output: str, music: Path | None) -> None:

@@ -94,17 +94,22 @@ def parse_time_key(text: str) -> tuple[float, str]:
     return seconds, source
 
 
+def pose_file(spec: str) -> tuple[str, int]:
+    """'dance.npz@42' -> ('dance.npz', 42); 'pose.bvh' -> ('pose.bvh', 0)."""
+    if "@" not in spec or Path(spec).is_file():  # a file may have @ in its own path
+        return spec, 0
+    path, _, index = spec.rpartition("@")
+    try:
+        return path, int(index)
+    except ValueError:
+        raise ParameterError(f"pose {spec!r}: the part after @ must be a frame number") from None
+
+
 def read_pose(spec: str) -> Motion:
     """One frame of a motion file: 'pose.bvh' (its first frame) or 'dance.npz@42' / 'dance.bvh@-1'."""
     from ..formats import read_motion
 
-    path, frame = spec, 0
-    if "@" in spec and not Path(spec).is_file():  # a file may have @ in its own path
-        path, _, index = spec.rpartition("@")
-        try:
-            frame = int(index)
-        except ValueError:
-            raise ParameterError(f"pose {spec!r}: the part after @ must be a frame number") from None
+    path, frame = pose_file(spec)
     motion = read_motion(path)
     if not -motion.num_frames <= frame < motion.num_frames:
         raise ParameterError(f"pose {spec!r}: {Path(path).name} has {motion.num_frames} frames")

@@ -1,9 +1,10 @@
 """Passes every generated dance goes through after its backend: speed limit (no joint faster
 than real dancers move), root path (travel without wobble), pace (a whole song's travel at its
 genre's pace), accent (motion beats as pronounced as real dancers'), footsteps (feet that stand
-and step instead of gliding), beat lock (re-timing onto the music's beats) and, when asked, foot
-lock (planted feet carry the body). Each pass has a
-module, a function and a config of one name; ``choreo.pipeline.Finishing`` turns them on and off."""
+and step instead of gliding), beat lock (re-timing onto the music's beats), rest (still through
+the silence before and after the music) and, when asked, foot lock (planted feet carry the
+body). Each pass has a module, a function and a config of one name; ``Finishing``
+(choreo.finishing.settings) turns them on and off."""
 
 from __future__ import annotations
 
@@ -19,11 +20,11 @@ from .footsteps import FootstepsConfig, footsteps
 from .pace import PaceConfig, pace
 from .rest import RestConfig, rest
 from .root_path import RootPathConfig, root_path
+from .settings import Finishing
 from .speed_limit import SpeedLimitConfig, speed_limit
 
 if TYPE_CHECKING:
     from ..constraints import Constraints
-    from ..pipeline import Finishing
 
 
 def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing | None" = None,
@@ -43,8 +44,6 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
     beats (a leg's swing is part of the body's speed), and a re-timing keeps a standing foot
     standing (docs/results.md, "Feet"). Rest after the beat lock: it re-times only the quiet ends,
     so the beats locked in between stay."""
-    from ..pipeline import Finishing
-
     on = finishing or Finishing()
     settings = on.configs
     fixed = constraints.fixed_frames() if hasattr(constraints, "fixed_frames") else constraints
@@ -71,6 +70,6 @@ def _run(run, motion: Motion, music_beat_frames: np.ndarray, fixed, config, audi
     return run(motion, fixed, **extra)
 
 
-__all__ = ["AccentConfig", "BeatLockConfig", "BeatLockResult", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RestConfig",
+__all__ = ["AccentConfig", "BeatLockConfig", "BeatLockResult", "Finishing", "FootLockConfig", "FootstepsConfig", "PaceConfig", "RestConfig",
            "RootPathConfig", "SpeedLimitConfig", "accent", "beat_lock", "finish", "foot_lock", "footsteps", "lock_warp",
            "pace", "rest", "root_path", "speed_limit"]

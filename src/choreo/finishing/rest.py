@@ -20,7 +20,7 @@ from ..errors import ParameterError
 from ..motion import Motion
 from ..motion.beats import smoothed_speed
 from ..skeleton import SMPL24
-from .footsteps import LEGS
+from ..skeleton.legs import LEGS
 
 FOOT_DOWN = 0.03  # metres: an ankle this close to its standing height has its foot on the floor
 

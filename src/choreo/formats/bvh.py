@@ -31,6 +31,7 @@ from ..motion.delivery import with_root_bone
 from ..motion.motion import frame_chunks
 from ..skeleton import (SMPL24, Skeleton, continuous_euler, elementary_rotation, euler_to_matrix, matrix_to_euler,
                         matrix_to_quaternion, quaternion_to_matrix)
+from .joints import END_SITES, check_joint_names
 
 ROTATION_ORDER = "ZXY"
 UNIT_SCALE = {"m": 1.0, "cm": 100.0}
@@ -39,10 +40,6 @@ UNIT_SCALE = {"m": 1.0, "cm": 100.0}
 # without channels in a 476 kB file took 780 MB); more is refused, as joints below it are.
 MAX_JOINTS_ABOVE = 32
 ROOT_TIP = (0.0, 0.0, 0.2)  # a root bone's End Site for Blender (write_tree's root_tip): ahead, on the floor
-END_SITES = {  # short bones past the leaves so viewers draw a head, hands and toes
-    "head": (0.0, 0.1, 0.0), "l_hand": (0.08, 0.0, 0.0), "r_hand": (-0.08, 0.0, 0.0),
-    "l_foot": (0.0, 0.0, 0.06), "r_foot": (0.0, 0.0, 0.06),
-}  # fmt: skip
 
 
 @dataclass
@@ -106,17 +103,6 @@ def _leaf_tips(skeleton: Skeleton) -> dict:
     """An End Site per leaf: END_SITES by name, a short bone up otherwise."""
     return {j: END_SITES.get(skeleton.names[j], (0.0, 0.05, 0.0))
             for j in range(len(skeleton.names)) if not skeleton.children(j)}
-
-
-def check_joint_names(names, format: str) -> None:
-    """Refuse joint names a file would not keep as one name: BVH splits its hierarchy on
-    whitespace and braces (a name holding a newline and ``MOTION`` forges the frame data), and no
-    format has a use for control or invisible characters. Names come verbatim from input files
-    (JSON), so this is checked on every write rather than trusted."""
-    for name in names:
-        if not name or not name.isprintable() or any(c.isspace() or c in "{}" for c in name):
-            raise MotionFormatError(f"joint name {ascii(name)[:60]} cannot be written to {format}: "
-                                    "names must be non-empty, printable, without spaces or braces")
 
 
 def _write_hierarchy(out: io.StringIO, skeleton: Skeleton, scale: float, end_sites: dict | None = None,

@@ -31,7 +31,7 @@ from ..motion import Motion, source_name
 from ..motion.delivery import ROOT_BONE, with_root_bone
 from ..motion.motion import file_metadata
 from ..skeleton import SMPL24, matrix_to_quaternion, quaternion_to_matrix
-from .bvh import END_SITES, check_joint_names
+from .joints import END_SITES, check_joint_names
 
 BODY_SIDES = 8  # a spindle's cross-section: enough to read as a limb, few enough to stay small
 BONE_RADIUS = 0.035  # metres at a bone's thickest point; thin bones (hands, feet) get less

@@ -36,8 +36,8 @@ from ..errors import MotionFormatError, ParameterError
 from ..motion import Motion, source_name
 from ..motion.motion import frame_chunks
 from ..skeleton import SMPL24, Skeleton, matrix_to_quaternion, quaternion_to_matrix
-from .bvh import (END_SITES, UNIT_SCALE, _local_rotations, above, check_joints_above, detect_scale, in_world, read_bvh_raw,
-                  write_tree)
+from .bvh import UNIT_SCALE, _local_rotations, above, check_joints_above, detect_scale, in_world, read_bvh_raw, write_tree
+from .joints import END_SITES
 
 LENGTHS = ("motion", "rig")
 

@@ -3,7 +3,7 @@ user or script passes is checked against the dataclass, by name, before any work
 
 A backend declares its generation options (``GeneratorPlugin.options``) and its training options
 (``GeneratorPlugin.train_options``) as dataclasses; the core declares the finishing passes
-(``choreo.pipeline.Finishing``) the same way. Fields made with :func:`option` become command-line
+(``choreo.finishing.Finishing``) the same way. Fields made with :func:`option` become command-line
 flags (``choreo.cli.flags``), their defaults read from the field, so no default is written twice.
 """
 

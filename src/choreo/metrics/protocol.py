@@ -45,8 +45,7 @@ def window_dance(window, motion, finished: bool = False, foot_lock: bool = False
     lock when asked)."""
     beats = music_beats(window.features)
     if finished:
-        from ..finishing import finish
-        from ..pipeline import Finishing
+        from ..finishing import Finishing, finish
 
         motion = finish(motion, beats, Finishing(foot_lock=foot_lock, footsteps=footsteps))
     return Dance(f"{window.clip}@{window.start_frame}", motion.joint_positions(), beats)

@@ -16,6 +16,8 @@ from ..errors import MotionFormatError
 from ..skeleton import Skeleton, quaternion_conjugate, quaternion_multiply, quaternion_to_matrix
 from .filters import low_pass
 from .motion import Motion, frame_chunks
+from .seam import CLOSING_SECONDS, closed, next_cycle
+from .stitch import rotate_about_y
 from .travel import FLOOR_AXES, TRACK_CUTOFF_HZ, ground_track
 
 MIN_DELIVERY_FPS, MAX_DELIVERY_FPS = 10.0, 240.0  # the rates --fps takes (film 24 to mocap 120, and a margin)
@@ -29,13 +31,32 @@ ROOT_BONE_CUTOFF_HZ = 0.4  # the root bone's path and facing: slower than the 1 
 
 def delivered(motion: Motion, fps: float | None = None, without_travel: bool = False) -> Motion:
     """The finished ``motion`` as a file gets it: in place (``without_travel``), then at ``fps``
-    (a loop stays a loop: choreo.looping.delivered_loop)."""
+    (a loop stays a loop: :func:`delivered_loop`)."""
     if "loop" in motion.metadata:
-        from ..looping import delivered_loop
-
         return delivered_loop(motion, fps, without_travel)
     motion = in_place(motion) if without_travel else motion
     return at_fps(motion, fps) if fps is not None else motion
+
+
+def delivered_loop(motion: Motion, fps: float | None = None, without_travel: bool = False) -> Motion:
+    """A loop in place (its per-cycle travel then only the turn about where it started) and at
+    ``fps``, still a loop: resampled over whole cycles, so ``fps`` times its length, rounded,
+    frames play one cycle (its tempo off by under half a frame per cycle), then closed again."""
+    changed = without_travel or (fps is not None and not np.isclose(fps, motion.fps))
+    if without_travel:
+        track = ground_track(motion.root_positions, motion.fps)[0]  # in place keeps the track's start
+        start = np.array([track[0], 0.0, track[1]])
+        motion = in_place(motion)
+        travel = start - rotate_about_y(start, np.radians(motion.metadata["loop"]["turn_degrees"]))
+        motion.metadata = dict(motion.metadata, loop=dict(motion.metadata["loop"], travel_m=[travel[0], travel[2]]))
+    if fps is not None and not np.isclose(fps, motion.fps):
+        count = max(2, int(round(motion.num_frames * fps / motion.fps)))
+        around = Motion.concatenate([motion, next_cycle(motion, 1)])
+        around = low_passed(around, ALIASING_MARGIN * fps / 2) if fps < motion.fps else around
+        loop = dict(motion.metadata["loop"], seconds=round(count / fps, 4))
+        motion = around.sample_frames(np.arange(count) * motion.num_frames / count).replace(
+            fps=float(fps), metadata=dict(motion.metadata, loop=loop))
+    return closed(motion, int(round(CLOSING_SECONDS * motion.fps))) if changed else motion
 
 
 def check_fps(fps: float) -> None:
