@@ -8,28 +8,62 @@ body). Each pass has a module, a function and a config of one name; ``Finishing`
 
 from __future__ import annotations
 
+import importlib
+import sys
+import types
 from typing import TYPE_CHECKING
 
-import numpy as np
-
-from ..motion import Motion
-from .accent import AccentConfig, accent
-from .beat_lock import BeatLockConfig, BeatLockResult, beat_lock, lock_warp
-from .foot_lock import FootLockConfig, foot_lock
-from .footsteps import FootstepsConfig, footsteps
-from .pace import PaceConfig, pace
-from .rest import RestConfig, rest
-from .root_path import RootPathConfig, root_path
 from .settings import Finishing
-from .speed_limit import SpeedLimitConfig, speed_limit
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from ..constraints import Constraints
+    from ..motion import Motion
+
+PASSES = ("speed_limit", "root_path", "pace", "accent", "footsteps", "beat_lock", "rest", "foot_lock")
+_DEFINED_IN = {**{name: name for name in PASSES},
+               **{"".join(part.title() for part in name.split("_")) + "Config": name for name in PASSES},
+               "BeatLockResult": "beat_lock", "lock_warp": "beat_lock"}
+_loaded = False
 
 
-def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing | None" = None,
-           constraints: "Constraints | np.ndarray | None" = None, anchors: np.ndarray | None = None,
-           audible: tuple[int, int] | None = None) -> Motion:
+def __getattr__(name: str):
+    """The passes load when first used: the command line builds its flags from ``Finishing``
+    alone, and `choreo --help` need not import numpy."""
+    if name not in _DEFINED_IN:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    _load()
+    return globals()[name]
+
+
+def _load() -> None:
+    """Every pass's names into this package, once. Each is bound after its module is imported,
+    which binds the module under the same name first (the pass ``pace`` lives in ``pace.py``)."""
+    global _loaded
+    if _loaded:
+        return
+    for name, module in _DEFINED_IN.items():
+        globals()[name] = getattr(importlib.import_module(f".{module}", __name__), name)
+    _loaded = True
+
+
+class _Package(types.ModuleType):
+    """This package: the import system binds a pass's module under its name (``pace.py`` as
+    ``pace``) when anything imports it; the name stays the pass's function."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in PASSES and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def finish(motion: "Motion", music_beat_frames: "np.ndarray", finishing: "Finishing | None" = None,
+           constraints: "Constraints | np.ndarray | None" = None, anchors: "np.ndarray | None" = None,
+           audible: tuple[int, int] | None = None) -> "Motion":
     """``motion`` through the passes ``finishing`` turns on (default: as `choreo generate` does);
     frames the ``constraints`` give (or a (T,) mask of fixed frames) stay. ``anchors``, a (T,) mask,
     are frames the re-timing leaves at their times (a loop's seam) while every pass still works on
@@ -44,6 +78,9 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
     beats (a leg's swing is part of the body's speed), and a re-timing keeps a standing foot
     standing (docs/results.md, "Feet"). Rest after the beat lock: it re-times only the quiet ends,
     so the beats locked in between stay."""
+    import numpy as np
+
+    _load()
     on = finishing or Finishing()
     settings = on.configs
     fixed = constraints.fixed_frames() if hasattr(constraints, "fixed_frames") else constraints
@@ -59,7 +96,7 @@ def finish(motion: Motion, music_beat_frames: np.ndarray, finishing: "Finishing 
     return motion
 
 
-def _run(run, motion: Motion, music_beat_frames: np.ndarray, fixed, config, audible=None) -> Motion:
+def _run(run, motion: "Motion", music_beat_frames: "np.ndarray", fixed, config, audible=None) -> "Motion":
     """One pass with its config (or its default); the beat lock also takes the music's beats,
     rest the music's audible span."""
     extra = {} if config is None else {"config": config}
