@@ -259,26 +259,8 @@ def json_name(text: str) -> str:
 
 def json_safe(value):
     """``value`` with every string in it (keys too, at any depth) passed through :func:`json_name`;
-    anything else as it is (numbers, numpy values, None). Without such strings (nearly always),
-    ``value`` itself: looked through without recursion, so deep metadata is copied only when it must be."""
-    return _escaped(value) if _has_surrogates(value) else value
-
-
-def _has_surrogates(value) -> bool:
-    pending = [value]
-    while pending:
-        item = pending.pop()
-        if isinstance(item, os.PathLike):
-            item = os.fspath(item)
-        if isinstance(item, str):
-            if any("\ud800" <= char <= "\udfff" for char in item):
-                return True
-        elif isinstance(item, dict):
-            pending.extend(item.keys())
-            pending.extend(item.values())
-        elif isinstance(item, (list, tuple)):
-            pending.extend(item)
-    return False
+    anything else as it is (numbers, numpy values, None)."""
+    return _escaped(value)
 
 
 def _escaped(value):

@@ -83,7 +83,6 @@ def generate(
     if shard is not None:
         songs = Shard.parse(shard).select(songs)
 
-
     def outputs_for(song: Path):
         if output is not None:
             return dance.outputs(list(output), preview, fps=fps, inputs=(seed_motion,))
@@ -95,9 +94,10 @@ def generate(
         return already_written(files + [str(Path(files[0]).with_suffix(".mp4"))] if preview else files)
 
     from ..constraints import seed_motion as opening_with
+    from ..formats import read_motion
 
     request = dance.request(constrained=seed_motion is not None, loop=loop)
-    opening = read_input_motion(seed_motion) if seed_motion is not None else None
+    opening = read_motion(seed_motion) if seed_motion is not None else None  # a bad file before any work
     fps = opening.fps if opening is not None else None  # a dance that continues a motion keeps its rate
     summaries, failed = [], 0
     for song in songs:
@@ -165,9 +165,10 @@ def inpaint(
       choreo inpaint song.mp3 --motion dance.bvh --joints upper -o new_arms.bvh --style "sharp, energetic arms"
     """
     from ..constraints import inpainting, parse_frame_range, parse_joints
+    from ..formats import read_motion
 
     request = dance.request(constrained=True)
-    given = read_input_motion(motion)
+    given = read_motion(motion)  # a bad file before any work
     region = parse_frame_range(frames, given.num_frames) if frames else None
     edit = partial(inpainting, motion=given, frames=region, joints=parse_joints(joints))
     dance_one(request, song, dance.outputs(output, fps=given.fps, inputs=(motion,)), edit)
@@ -188,10 +189,3 @@ def trajectory(
     from ..constraints import along_path
 
     dance_one(dance.request(constrained=True), song, dance.outputs(output, inputs=(path,)), partial(along_path, path=path))
-
-
-def read_input_motion(path: Path):
-    """The motion a dance continues or edits, read before any work (a bad file costs nothing)."""
-    from ..formats import read_motion
-
-    return read_motion(path)

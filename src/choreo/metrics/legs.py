@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..skeleton.smpl import FOOT_JOINTS, LEFT_ANKLE, RIGHT_ANKLE
-from .stepping import UP_AXIS
+from .stepping import UP_AXIS, horizontal_speeds
 
 FLOOR_PERCENTILE, LIFT_PERCENTILE = 5.0, 90.0
 PELVIS = 0
@@ -40,7 +40,7 @@ class Legs:
 def feet_speed(positions: np.ndarray, fps: float) -> float:
     """Mean horizontal speed (m/s) of the ankles and toes relative to the pelvis."""
     around = positions[:, list(FOOT_JOINTS)] - positions[:, PELVIS:PELVIS + 1]
-    return float(_horizontal_speed(around, fps).mean())
+    return float(horizontal_speeds(around, fps).mean())
 
 
 def ankle_lift(positions: np.ndarray) -> float:
@@ -52,7 +52,7 @@ def ankle_lift(positions: np.ndarray) -> float:
 
 def pelvis_speed(positions: np.ndarray, fps: float) -> float:
     """Mean horizontal frame-to-frame speed (m/s) of the pelvis."""
-    return float(_horizontal_speed(positions[:, PELVIS:PELVIS + 1], fps).mean())
+    return float(horizontal_speeds(positions[:, PELVIS:PELVIS + 1], fps).mean())
 
 
 def foot_jerk(positions: np.ndarray, fps: float) -> float:
@@ -79,8 +79,3 @@ def mean_legs(dances: list[Legs]) -> Legs:
     sums, counts = np.where(finite, values, 0.0).sum(0), finite.sum(0)
     return Legs(*(float(s / c) if c else float("nan") for s, c in zip(sums, counts)))
 
-
-def _horizontal_speed(points: np.ndarray, fps: float) -> np.ndarray:
-    step = np.diff(points, axis=0)
-    step[..., UP_AXIS] = 0.0
-    return np.linalg.norm(step, axis=-1) * fps
