@@ -12,7 +12,6 @@ item 3 (2026-12-04: the overlap loses on two cores; docs/results.md, "Jobs side 
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -22,8 +21,7 @@ import choreo
 from choreo.formats import write_motion
 from choreo.music import Music
 
-sys.path.insert(0, str(Path(__file__).parent))
-from common import write_song  # noqa: E402
+from common import write_song
 
 
 def batch(songs: list[Path], backend, out: Path, overlap: bool, threads: int) -> tuple[float, float]:

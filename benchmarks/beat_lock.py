@@ -31,9 +31,9 @@ import numpy as np
 from choreo.generator import GenerationRequest
 from choreo.finishing import beat_lock, finish
 from choreo.metrics import beat_align_score, beat_autocorrelation, motion_beats, salience_at, same_pulse
-from choreo.music import BeatSource, Music, audio_duration
+from choreo.music import BeatOptions, BeatSource, Music, audio_duration
 
-sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).parent))  # its sibling too when imported (experiments/rest_beat_lock.py)
 from outside_songs import outside_songs  # noqa: E402
 
 SKIP_SECONDS = 10.0  # past the intro
@@ -61,8 +61,8 @@ BEATS = "choreo"  # --beats: whose beats the songs are danced to (choreo's track
 
 def beat_source(stated_bpm: float | None) -> BeatSource:
     if BEATS == "stated" and stated_bpm is not None:
-        return BeatSource.from_options(bpm=stated_bpm)
-    return BeatSource.from_options(tracker="madmom" if BEATS == "madmom" else "choreo")
+        return BeatOptions(bpm=stated_bpm).source()
+    return BeatOptions(beat_tracker="madmom" if BEATS == "madmom" else "choreo").source()
 
 
 def generators() -> dict:

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -33,8 +32,7 @@ from choreo.errors import ParameterError
 from choreo.music import Music, load_audio
 from choreo.music import madmom_tracker
 
-sys.path.insert(0, str(Path(__file__).parent))
-from outside_songs import outside_songs  # noqa: E402
+from outside_songs import outside_songs
 
 ACC2_MULTIPLES = (1.0, 2.0, 0.5, 3.0, 1.0 / 3.0)
 

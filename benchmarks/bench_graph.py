@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -25,8 +24,7 @@ from choreo.music import Music
 from choreo.music.mel import music_log_mel
 from choreo_graph import DEFAULT_CHECKPOINT, DEFAULT_REPERTOIRE
 
-sys.path.insert(0, str(Path(__file__).parent))
-from common import TARGET_SECONDS, cli_peak_rss, write_song  # noqa: E402
+from common import TARGET_SECONDS, cli_peak_rss, write_song
 
 
 def speed(generator: Generator, top_ks: list[int], durations: list[float], folder: Path) -> None:

@@ -14,7 +14,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -26,8 +25,7 @@ from choreo.generator import GenerationRequest, Generator
 from choreo.music import Music
 from choreo_sgmd import DEFAULT_CHECKPOINT
 
-sys.path.insert(0, str(Path(__file__).parent))
-from common import REPO, TARGET_SECONDS, cli_peak_rss, song_of, write_song  # noqa: E402
+from common import REPO, TARGET_SECONDS, cli_peak_rss, song_of, write_song
 
 
 GUIDANCE_PAIRS = ((1.0, 1.0), (2.0, 1.0), (2.0, 2.0))  # (music, style): none, music only, both

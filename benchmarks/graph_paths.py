@@ -12,9 +12,7 @@ itself is not installed), else the example loop. Paths, stretched over each song
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -24,9 +22,8 @@ from choreo.generator import GenerationRequest
 from choreo.metrics.pfc import physical_foot_contact
 from choreo.music import Music
 
-sys.path.insert(0, str(Path(__file__).parent))
-from common import EXAMPLE  # noqa: E402
-from outside_songs import CACHE, outside_songs  # noqa: E402
+from common import EXAMPLE
+from outside_songs import CACHE, outside_songs
 
 
 WINDOW = 150  # PFC is scored on 5 s windows, as in every quality table here

@@ -18,7 +18,6 @@ Writes the markdown report and its plots (``--out`` folder + report/).
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -34,9 +33,8 @@ from choreo.metrics.protocol import (TABLE_HEADER, ScoringSet, music_beats, scor
                                      table_row, windows_as_dances)
 from choreo.music import Music
 
-sys.path.insert(0, str(Path(__file__).parent))
-from beat_lock import dance_outside_songs, m2d_dancers, markdown as beat_lock_table  # noqa: E402
-from common import REPO, cli_peak_rss, write_song  # noqa: E402
+from beat_lock import dance_outside_songs, m2d_dancers, markdown as beat_lock_table
+from common import REPO, cli_peak_rss, write_song
 
 EDGE_CHECKPOINT = REPO / "generators" / "choreo_sgmd" / "weights" / "sgmd-edge-m2d.pt"
 

@@ -22,7 +22,7 @@ from choreo.finishing import AccentConfig, accent, finish
 from choreo.metrics.whole_song import whole_song
 from choreo.pipeline import Finishing
 
-from scripts.evaluate_whole_songs import FPS, song_of, split_clips
+from choreo.metrics.songs import FPS, song_of, split_clips
 
 REPO = Path(__file__).resolve().parents[1]
 

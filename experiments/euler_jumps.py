@@ -20,7 +20,7 @@ from choreo.datasets import load_dataset
 from choreo.formats.bvh import ROTATION_ORDER
 from choreo.skeleton import continuous_euler, matrix_to_euler
 
-from scripts.evaluate_whole_songs import song_of
+from choreo.metrics.songs import song_of
 
 REPO = Path(__file__).resolve().parents[1]
 

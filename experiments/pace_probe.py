@@ -21,7 +21,7 @@ import torch
 import choreo
 from choreo.datasets import load_dataset
 
-from scripts.evaluate_whole_songs import song_of
+from choreo.metrics.songs import song_of
 
 
 

@@ -14,7 +14,7 @@ import choreo
 from choreo.music import Music
 from choreo.pipeline import Finishing
 
-from scripts.evaluate_whole_songs import figures
+from choreo.metrics.songs import figures
 
 
 def main() -> None:

@@ -33,64 +33,15 @@ import numpy as np
 
 import choreo
 import choreo.finishing
-from choreo.datasets import TEST, TRAIN, load_dataset, select_split
-from choreo.datasets.m2d import validation_clips
-from choreo.finishing import AccentConfig, FootstepsConfig, PaceConfig, RootPathConfig
-from choreo.metrics.beats import beat_align_score, motion_beats
-from choreo.metrics.fid import frechet_distance, motion_features, normalise_by_reference
-from choreo.metrics.protocol import SCORING_WINDOWS, scoring_windows
-from choreo.metrics.two_sample import classifier_test
-from choreo.metrics.whole_song import WholeSong, whole_song
+from choreo.datasets import TRAIN, load_dataset, select_split
+from choreo.finishing import AccentConfig, Finishing, FootstepsConfig, PaceConfig, RootPathConfig
+from choreo.metrics.fid import motion_features
+from choreo.metrics.protocol import scoring_windows
+from choreo.metrics.songs import (COLUMNS, FPS, classifier_tests, figures, mean_rows, song_of, split_clips,
+                                  target_failures, window_fids)
 from choreo.music import Music
-from choreo.pipeline import Finishing
 
 REPO = Path(__file__).resolve().parents[1]
-FPS = 30.0
-COLUMNS = ("pace", "reach", "planted", "foot_root", "slide", "jerk", "root_jerk", "body_jerk", "beat_align", "beat_dip",
-           "feet_speed", "ankle_lift", "pelvis_speed", "foot_jerk")
-BOOTSTRAP = 300
-
-
-def split_clips(clips, split: str):
-    if split == "validation":
-        held = set(validation_clips())
-        return [c for c in clips if c.name in held]
-    return select_split(clips, TEST if split == "test" else split)
-
-
-def song_of(clip) -> Music:
-    """The clip's music from where its dance starts, for the dance's length (as a user would cut it)."""
-    start = max(clip.audio_offset, 0.0)
-    return Music.from_file(clip.audio_path, start=start, end=start + clip.motion.num_frames / FPS,
-                           log_mel=True, timbre=True)
-
-
-def figures(positions: np.ndarray, music: Music) -> dict:
-    row = whole_song(positions, FPS).to_dict()
-    row["beat_align"] = beat_align_score(music.beat_frames, motion_beats(positions))
-    return row
-
-
-def windows_of(positions: np.ndarray) -> list[np.ndarray]:
-    size, stride = round(SCORING_WINDOWS.seconds * FPS), round(SCORING_WINDOWS.stride_seconds * FPS)
-    return [positions[s:s + size] for s in range(0, len(positions) - size + 1, stride)]
-
-
-def fid_with_interval(features: np.ndarray, reference: np.ndarray, rng: np.random.Generator) -> tuple[float, float, float]:
-    """FID of the set against the reference and its 95 % bootstrap interval (windows resampled)."""
-    generated, ref = normalise_by_reference(features, reference)
-    value = frechet_distance(generated, ref)
-    draws = [frechet_distance(generated[rng.integers(0, len(generated), len(generated))], ref) for _ in range(BOOTSTRAP)]
-    low, high = np.percentile(draws, [2.5, 97.5])
-    return value, float(low), float(high)
-
-
-def window_fids(dances: list[np.ndarray], reference: tuple[np.ndarray, np.ndarray], seed: int = 0) -> dict:
-    features = [motion_features(w) for d in dances for w in windows_of(d)]
-    kinetic, geometric = np.stack([k for k, _ in features]), np.stack([g for _, g in features])
-    rng = np.random.default_rng(seed)
-    return {"windows": len(features), "fid_k": fid_with_interval(kinetic, reference[0], rng),
-            "fid_g": fid_with_interval(geometric, reference[1], rng)}
 
 
 def parse_pairs(pairs: list[str]) -> dict:
@@ -111,24 +62,6 @@ def print_rows(per_song: dict, real: dict) -> None:
     for name in per_song:
         for who, row in (("real", real[name]), ("generated", per_song[name])):
             print(f"| {name} | {who} | " + " | ".join(fmt(row[c]) for c in COLUMNS) + " |")
-
-
-def target_failures(songs: dict) -> list[str]:
-    """The issue's targets per song (mean over seeds) that a run misses, one line each."""
-    latin = [v["real"]["jerk"] for v in songs.values() if v["genre"] != "waltz"]
-    latin_jerk = float(np.mean(latin)) if latin else float("nan")
-    misses = []
-    for name, entry in songs.items():
-        real, mean = entry["real"], mean_rows(entry["seeds"])
-        jerk_mark = 1.5 * (latin_jerk if entry["genre"] == "waltz" else real["jerk"])
-        checks = {"pace": abs(mean["pace"] / real["pace"] - 1) <= 0.2,
-                  "reach": mean["reach"] <= 1.5 * real["reach"] + 0.5,
-                  "planted": mean["planted"] >= 0.9 * real["planted"],
-                  "foot_root": mean["foot_root"] <= real["foot_root"] + 0.1,
-                  "jerk": mean["jerk"] <= jerk_mark,
-                  "beat_dip": mean["beat_dip"] >= 0.8 * real["beat_dip"]}
-        misses += [f"{name} {key}: {mean[key]:.3f} (real {real[key]:.3f})" for key, ok in checks.items() if not ok]
-    return misses
 
 
 def report(paths: list[str]) -> None:
@@ -159,28 +92,6 @@ def pass_configs(pairs: list[str]) -> dict:
         name, _, field = key.partition(".")
         by_pass.setdefault(name, {})[field] = value
     return {name: CONFIGS[name](**fields) for name, fields in by_pass.items()}
-
-
-def mean_rows(rows: list[dict]) -> dict:
-    """Each column's mean over rows (runs saved before a column existed: NaN)."""
-    return {c: float(np.nanmean([r.get(c, np.nan) for r in rows])) if any(c in r for r in rows) else float("nan")
-            for c in COLUMNS}
-
-
-def classifier_tests(dances: list[np.ndarray], real_dances: list[np.ndarray], genres: list[str],
-                     real_genres: list[str], groups: list[str]) -> dict:
-    """The classifier two-sample test (choreo.metrics.two_sample) against the real dancers to the
-    same songs, pooled over the Latin songs and over every song; windows grouped by song and seed."""
-    tests = {}
-    for name, keep in (("latin", lambda g: g != "waltz"), ("all", lambda g: True)):
-        mine = [i for i, g in enumerate(genres) if keep(g)]
-        theirs = [i for i, g in enumerate(real_genres) if keep(g)]
-        result = classifier_test([dances[i] for i in mine], [real_dances[i] for i in theirs], FPS,
-                                 [groups[i] for i in mine])
-        tests[name] = vars(result)
-        print(f"classifier test, {name} songs: balanced accuracy {result.accuracy:.3f} ({result.windows} windows "
-              f"against {result.reference_windows} real, {result.folds} folds)")
-    return tests
 
 
 def main() -> None:
@@ -243,6 +154,9 @@ def main() -> None:
         print(f"{who}: {f['windows']} windows, FID_k {f['fid_k'][0]:.2f} [{f['fid_k'][1]:.2f}, {f['fid_k'][2]:.2f}], "
               f"FID_g {f['fid_g'][0]:.2f} [{f['fid_g'][1]:.2f}, {f['fid_g'][2]:.2f}]")
     classifier = classifier_tests(dances, real_dances, genres, real_genres, groups)
+    for name, result in classifier.items():
+        print(f"classifier test, {name} songs: balanced accuracy {result['accuracy']:.3f} ({result['windows']} windows "
+              f"against {result['reference_windows']} real, {result['folds']} folds)")
     outside = {song: dance_outside(song, backend, args, options, finishing) for song in args.outside}
     if args.json:  # an outside song's file by its hash: LMMS renders a song differently each time
         heard = {song: hashlib.sha256(Path(song).read_bytes()).hexdigest() for song in args.outside}

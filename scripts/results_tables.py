@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from evaluate_whole_songs import mean_rows, target_failures
+from choreo.metrics.songs import mean_rows, target_failures
 
 REPO = Path(__file__).resolve().parents[1]
 RUNS = REPO / "docs" / "results" / "whole_songs"
@@ -95,17 +95,6 @@ VALIDATION_ACCENT = [("none (the defaults until now)", "validation-step12000-gui
                      ("0.3", "validation-step12000-accent-0.3"),
                      ("none, seeds 3-5", "validation-step12000-baseline-seeds-3-5"),
                      ("0.2, seeds 3-5", "validation-step12000-accent-0.2-seeds-3-5")]
-VALIDATION_FEET = [("the plan + 0.35 of the glide and of the quick moves (the defaults)", "validation-step12000-guidance-2"),
-                   ("the plan + 0.5 of the quick moves", "validation-step12000-footsteps-split-1-0.5"),
-                   ("the plan + 0.7 of the quick moves", "validation-step12000-footsteps-split-1-0.7"),
-                   ("the plan + 0.15 of the glide + 0.7 of the quick moves", "validation-step12000-footsteps-split-0.85-0.7")]
-VALIDATION_LATIN_SPLIT = [("the plan + 0.25 of the glide and of the quick moves (the defaults)", "validation-latin-split-base"),
-                          ("the plan + 0.5 of the quick moves", "validation-latin-split-1-0.5"),
-                          ("the plan + 0.7 of the quick moves", "validation-latin-split-1-0.7"),
-                          ("the plan + 0.1 of the glide + 0.5 of the quick moves", "validation-latin-split-0.9-0.5"),
-                          ("the defaults, seeds 3-5", "validation-latin-split-base-seeds-3-5"),
-                          ("the plan + 0.5 of the quick moves, seeds 3-5", "validation-latin-split-1-0.5-seeds-3-5"),
-                          ("the plan + 0.7 of the quick moves, seeds 3-5", "validation-latin-split-1-0.7-seeds-3-5")]
 VALIDATION_GRAPH = [("no floor (the defaults until now)", "validation-graph-no-floor"),
                     ("floor 3 m (the default)", "validation-graph-floor-3"), ("floor 2 m", "validation-graph-floor-2"),
                     ("floor 3 m, accent 0.2", "validation-graph-floor-3-accent"),
@@ -119,10 +108,6 @@ VALIDATION_LATIN = [("SGMD, 0.65 (the default until now)", "validation-latin-foo
                     ("ChoreoGraph, 0.65", "validation-graph-latin-footsteps-0.65"),
                     ("ChoreoGraph, 0.75", "validation-graph-latin-footsteps-0.75"),
                     ("ChoreoGraph, 0.85", "validation-graph-latin-footsteps-0.85")]
-VALIDATION_SAMPLER_PACE = [("none (the defaults)", "validation-step12000-latin-0.75"),
-                           ("within 1.5 x, every step", "validation-sampler-pace-1.5"),
-                           ("within 1.25 x, every step", "validation-sampler-pace-1.25"),
-                           ("within 1.5 x, noise levels up to 0.5", "validation-sampler-pace-1.5-below-0.5")]
 VALIDATION_TRAVEL = [("1, every genre (the default until now)", "validation-travel-guided"),
                      ("0.5, every genre", "validation-travel-0.5"), ("0, every genre", "validation-travel-0"),
                      ("0.5 in waltz, 1 in cha-cha and rumba", "validation-travel-0.5-waltz"),
@@ -134,11 +119,6 @@ VALIDATION_TRAVEL = [("1, every genre (the default until now)", "validation-trav
                      ("1, training seed 1", "validation-seed1-travel-guided"),
                      ("0.5 in waltz, training seed 1", "validation-seed1-travel-0.5-waltz"),
                      ("0 in waltz, training seed 1", "validation-seed1-travel-0-waltz")]
-VALIDATION_PACE_CONDITION = [("the held-out model (travel guided in every genre)", "validation-travel-guided"),
-                             ("the same recipe with the pace condition, asked the genre's pace (travel guided)",
-                              "validation-pace-condition"),
-                             ("the held-out model, seeds 3-5", "validation-travel-guided-seeds-3-5"),
-                             ("with the pace condition, seeds 3-5", "validation-pace-condition-seeds-3-5")]
 
 
 @cache
@@ -271,13 +251,9 @@ VALIDATION_TABLES = {
     "whole-songs-validation": ("music guidance", VALIDATION),
     "whole-songs-validation-finishing": ("finishing (root path cut-off, footsteps strength, pace bound)", VALIDATION_FINISHING),
     "whole-songs-validation-accent": ("accent depth", VALIDATION_ACCENT),
-    "whole-songs-validation-feet": ("where the ankles go", VALIDATION_FEET),
     "whole-songs-validation-graph": ("ChoreoGraph", VALIDATION_GRAPH),
-    "whole-songs-validation-latin-split": ("where a cha-cha's or a rumba's ankles go", VALIDATION_LATIN_SPLIT),
     "whole-songs-validation-latin": ("footsteps strength, cha-cha and rumba", VALIDATION_LATIN),
-    "whole-songs-validation-sampler-pace": ("the sampler's pull toward the genre's pace", VALIDATION_SAMPLER_PACE),
     "whole-songs-validation-travel": ("guidance on the travel (share)", VALIDATION_TRAVEL),
-    "whole-songs-validation-pace-condition": ("SGMD, 12,000 steps without the validation clips", VALIDATION_PACE_CONDITION),
 }
 TABLES = {"whole-songs-summary": whole_songs_summary, "whole-songs-per-song": whole_songs_per_song,
           "whole-songs-outside": whole_songs_outside, "whole-songs-guidance": whole_songs_guidance,

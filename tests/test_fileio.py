@@ -157,6 +157,26 @@ def test_a_full_disk_is_an_output_error_with_one_line(tmp_path, source):
 
 
 @pytest.mark.hardening
+@pytest.mark.parametrize("command", ["generate", "render"])
+def test_a_preview_past_the_disk_names_the_users_file_and_the_reason(tmp_path, source, command):
+    """ffmpeg writes the video: past ``ulimit -f`` it is killed (SIGXFSZ), on a full disk it says
+    so in its own words; either way one line naming the user's file, as choreo's own writers give."""
+    limit = 400_000 if command == "generate" else 20_000  # the dance (100 KB) fits, its video (1 MB) does not
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    song = Path(__file__).parents[1] / "examples" / "drum_and_bass_174bpm.wav"
+    args = (["generate", str(song), "-o", "dance.npy", "--steps", "2", "--threads", "1", "--preview"]
+            if command == "generate" else ["render", str(source), "-o", "dance.mp4"])
+    done = subprocess.run([sys.executable, "-m", "choreo", *args], cwd=tmp_path, capture_output=True, text=True,
+                          preexec_fn=small_files, env={**os.environ, "CHOREO_CACHE_DIR": str(tmp_path / "cache")})
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert done.returncode == 3 and lines[-1] == "choreo: error: cannot write dance.mp4: File too large", lines
+    assert not [p.name for p in tmp_path.iterdir() if p.name != "cache" and p.name != "source.bvh"]
+
+
+@pytest.mark.hardening
 @pytest.mark.parametrize("follow_links", [True, False])
 def test_a_link_is_written_through_only_when_links_are_followed(tmp_path, follow_links):
     victim, link = tmp_path / "victim.txt", tmp_path / "entry.npz"

@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
-from choreo.generator.options import forwarded
+from choreo.options import forwarded
 from choreo.generator.registry import lazy_exports
 
 from .config import CLIP_FRAMES, GraphConfig, TrainOptions

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field
 
-from choreo.generator.options import option
+from choreo.options import option
 
 FPS = 30
 NODE_FRAMES = FPS  # a graph node is one second of motion

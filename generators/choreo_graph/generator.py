@@ -12,7 +12,7 @@ from choreo.constraints import Constraints
 from choreo.constraints.displacement import displace_motion
 from choreo.errors import ParameterError
 from choreo.generator import GenerationRequest, Generator
-from choreo.generator.options import parse_options
+from choreo.options import parse_options
 from choreo.motion import Motion
 from choreo.music.mel import music_log_mel
 

@@ -11,7 +11,7 @@ from pathlib import Path
 from choreo.generator import GeneratorPlugin
 from choreo.generator.registry import lazy_exports
 
-from choreo.generator.options import forwarded
+from choreo.options import forwarded
 
 from .options import MUSIC_GUIDANCE, SamplingOptions, TrainOptions
 

@@ -12,7 +12,7 @@ import torch
 from choreo.constraints import Constraints, parse_style_schedule
 from choreo.finishing.pace import target_pace
 from choreo.errors import InputError, ParameterError
-from choreo.generator.options import parse_options
+from choreo.options import parse_options
 from choreo.generator import GenerationRequest, Generator
 from choreo.generator.checkpoint import damaged_checkpoint
 from choreo.motion import Motion, vector_to_motion

@@ -6,7 +6,7 @@ from dataclasses import dataclass, replace
 from typing import ClassVar
 
 from choreo.generator.base import check_seed
-from choreo.generator.options import forwarded, option
+from choreo.options import forwarded, option
 from choreo.numbers import shown
 
 SAMPLERS = ("ddim", "ddpm")
@@ -164,7 +164,8 @@ class TrainOptions:
                                              "against the data's, in (m/s)^2.")
     legs_weight: float | None = option(None, "Weight of the knees, ankles and feet around the pelvis against the data's "
                                              "(positions in m^2 + speeds in (m/s)^2), by each window's signal share.")
-    init_from: str | None = option(None, "Fine-tune from this training state (same network; its step count carries on).",
+    init_from: str | None = option(None, "Fine-tune from this training state or generation checkpoint (same network; "
+                                         "its step count carries on; a generation checkpoint's optimiser starts afresh).",
                                    existing_file=True)
     hold_out_validation: bool = option(False, "On M2D: train without the validation clips (docs/m2d.md) and "
                                               "validate on them.", "--hold-out-validation")

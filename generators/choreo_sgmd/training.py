@@ -190,7 +190,13 @@ class Trainer:
     def start_from(self, state: dict, name: str) -> None:
         """Fine-tune: another run's weights, optimiser and step, under this run's losses and data
         settings. The network must be the same, or that network given a pace condition: then its
-        weights are loaded into the new one, whose pace branch starts silent, and the optimiser starts afresh."""
+        weights are loaded into the new one, whose pace branch starts silent, and the optimiser starts afresh.
+        A generation checkpoint (EMA weights only, ``choreo_sgmd.checkpoint.inference_state``) is
+        started from too: its EMA weights become the raw ones as well, and the optimiser starts afresh."""
+        if "state_dict" not in state:
+            weights = {key: value.float() for key, value in state["ema_state_dict"].items()}
+            state = {**state, "state_dict": weights, "ema_state_dict": dict(weights),
+                     "optimizer": {"state": {}, "param_groups": self.optimizer.state_dict()["param_groups"]}}
         stored = asdict(ModelConfig(**state["model_config"]))
         adds_pace = self.model_config.pace_condition and not stored["pace_condition"]
         changed = [f"{key} {value!r} -> {getattr(self.model_config, key)!r}" for key, value in stored.items()

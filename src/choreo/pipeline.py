@@ -18,6 +18,7 @@ business (``choreo.formats``). The beats are the tracker's unless the caller kno
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,7 +26,8 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping, Union
 
 from .errors import ParameterError
 from .finishing import Finishing  # re-exported: choreo.pipeline.Finishing stays importable
-from .generator.base import check_seed
+from .generator.base import MAX_SEED, check_seed
+from .options import option
 
 if TYPE_CHECKING:
     from .constraints import Constraints
@@ -101,17 +103,23 @@ class DanceRequest:
     cannot keep, a seed out of range."""
 
     backend: Backend
-    style: str | None = None  # a genre, free text or a schedule (the backend reads it)
-    seed: int = 0
+    style: str | None = option(None, "Genre (waltz, rumba, ...), its index, free text, or a schedule "
+                                     "0:30=waltz,30:=cha-cha.", "--style")
+    seed: int = option(0, "Random seed: same seed, same dance (the graph: another walk, another take).", "--seed",
+                       bounds=(-MAX_SEED, MAX_SEED))
     options: Mapping[str, Any] = field(default_factory=dict)  # the backend's own; absent ones: its defaults
     finishing: Finishing = Finishing()
     beats: "BeatSource | None" = None  # None: choreo's tracker
-    threads: int | None = None  # torch threads; None: what other work leaves idle (choreo.threads)
+    threads: int | None = option(None, "CPU threads to dance with (default: the CPUs this job may use that other work "
+                                       "leaves idle; OMP_NUM_THREADS is honoured). The same seed gives the same bytes "
+                                       "at any count.", "--threads", bounds=(1, math.inf))
     constrained: bool = False  # whether constraints will come (keys, seed motion, inpainting, a path)
     loop: bool = False  # a dance that loops: whole bars, led back into its opening (choreo.looping)
 
     def __post_init__(self):
         check_seed(self.seed)
+        if self.threads is not None and self.threads < 1:
+            raise ParameterError(f"threads must be at least 1, got {self.threads}")
         if self.loop and self.constrained:
             raise ParameterError("--loop leads the dance back into its own opening: it cannot also keep given "
                                  "frames (--seed-motion, keys, a path)")
@@ -123,7 +131,7 @@ class DanceRequest:
                                  "a path); use sgmd")
         if self.loop and not plugin.constraints:  # a loop's second take is a constrained one
             raise ParameterError(f"the {name} backend cannot lead a dance back into its opening (--loop)")
-        if plugin.options is not None and self.options:
+        if self.options:
             check_options(name, plugin.options, self.options, self.backend.bundled)
 
     def analyse(self, song: str | os.PathLike, progress: Callable[[float, float], None] | None = None) -> "Music":
@@ -180,11 +188,14 @@ class DanceRequest:
                                  constraints=constraints)
 
 
-def check_options(backend: str, options_type: type, given: Mapping[str, Any], bundled: bool) -> None:
-    """Refuse options ``options_type`` does not have or refuses; on the bundled checkpoint, also
-    steps its noise chain cannot take (an options type with ``bundled_timesteps`` and ``on_chain``),
-    so that they fail now rather than after the song's analysis."""
-    from .generator.options import parse_options
+def check_options(backend: str, options_type: type | None, given: Mapping[str, Any], bundled: bool) -> None:
+    """Refuse options ``options_type`` does not have (None: a backend without options) or refuses;
+    on the bundled checkpoint, also steps its noise chain cannot take (an options type with
+    ``bundled_timesteps`` and ``on_chain``), so that they fail now rather than after the song's analysis."""
+    from .options import parse_options
+
+    if options_type is None:
+        raise ParameterError(f"{backend} has no options (given: {', '.join(sorted(given))})")
 
     chosen = parse_options(backend, options_type, given)
     chain = getattr(chosen, "bundled_timesteps", None)
@@ -224,16 +235,16 @@ def dance(
     non-commercial). ``loop``: a dance of whole bars that ends where it began (choreo.looping).
     The rest: :class:`DanceRequest` and its ``dance``.
     """
-    from .music import BeatSource, Music
+    from .music import BeatOptions, Music
 
     if isinstance(generator, str):
         backend = Backend(generator, checkpoint)
     else:
         backend = generator if isinstance(generator, Backend) else Backend.holding(generator)
-    given_beats = bpm is not None or beats is not None or beat_tracker != "choreo"
-    if given_beats and isinstance(song, Music):
+    beat_options = BeatOptions(bpm=bpm, beats=beats, beat_tracker=beat_tracker)
+    if beat_options.given and isinstance(song, Music):
         raise ParameterError("the music is already analysed: give its beats to Music.from_file instead")
     request = DanceRequest(backend=backend, style=style, seed=seed, options=dict(options or {}), finishing=finishing,
-                           beats=BeatSource.from_options(bpm, beats, beat_tracker) if given_beats else None,
+                           beats=beat_options.source() if beat_options.given else None,
                            threads=threads, constrained=constraints is not None, loop=loop)
     return request.dance(song, constraints, analysis_progress, progress)

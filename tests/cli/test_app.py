@@ -277,6 +277,15 @@ def test_seeds_past_the_backends_range_are_refused_by_name(tmp_path, capsys, com
     assert words in err and len(err) < 120 and not (tmp_path / "dance.bvh").exists()
 
 
+@pytest.mark.parametrize("threads, words", [("-3", "--threads must be at least 1"), ("0", "--threads must be at least 1"),
+                                            ("1.5", "--threads takes a whole number")])
+@pytest.mark.parametrize("command", ["generate", "graph"])
+def test_thread_counts_below_one_are_refused_by_name(tmp_path, capsys, command, threads, words):
+    code, _, err = run_cli(capsys, command, EXAMPLE_SONG, "-o", tmp_path / "dance.bvh", f"--threads={threads}")
+    assert_one_line_error(code, err)
+    assert words in err and not (tmp_path / "dance.bvh").exists()
+
+
 @pytest.mark.parametrize("flags, words", [(("--guidance", "nan"), "--guidance takes a finite number"),
                                           (("--guidance", "inf"), "--guidance takes a finite number"),
                                           (("--guidance", "1e308"), "guidance must be 0 to 20"),
@@ -347,7 +356,7 @@ def test_every_bracket_in_help_reaches_the_screen(monkeypatch, capsys):
     assert checked >= 3
 
 
-@pytest.mark.parametrize("args", [["generate", "x.wav", "--bogus"], ["generate", "x.wav", "--threads=-3"],
+@pytest.mark.parametrize("args", [["generate", "x.wav", "--bogus"], ["generate", "x.wav", "--steps=abc"],
                                   ["frobnicate"], ["generate"]])
 def test_usage_errors_are_one_line_naming_the_help(capsys, args):
     """click's usage errors printed a usage block, a hint and the error (four lines): one line now,

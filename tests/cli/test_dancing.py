@@ -10,7 +10,7 @@ import choreo
 from choreo.cli import main
 from choreo.formats import read_motion
 from choreo.generator import available_plugins
-from choreo.generator.options import FLAG, flag_fields
+from choreo.options import FLAG, flag_fields
 from choreo.pipeline import Finishing
 
 SONG = Path(__file__).parents[2] / "examples" / "drum_and_bass_174bpm.wav"
@@ -41,6 +41,34 @@ def test_every_dancing_command_takes_the_shared_and_the_finishing_flags():
         params = command_params(*command)
         for flag in SHARED + tuple(flag_names(Finishing)) + ("--no-root-path", "--no-pace", "--no-footsteps"):
             assert flag in params, (command, flag)
+
+
+def test_the_requests_beats_and_deliverys_flags_are_declared_once_on_their_dataclasses():
+    """Each shared flag's help is its dataclass field's (DanceRequest, BeatOptions, Delivery): the
+    commands that take them (the dancing ones, info, convert) read the same declaration."""
+    from choreo.motion.delivery_options import Delivery
+    from choreo.music.beat_options import BeatOptions
+    from choreo.pipeline import DanceRequest
+
+    owners = {DanceRequest: DANCING, BeatOptions: DANCING + (("info",),), Delivery: DANCING + (("convert",),)}
+    for owner, commands in owners.items():
+        helps = {name: f.metadata[FLAG].help for name, f in zip(flag_names(owner), flag_fields(owner))}
+        assert helps, owner
+        for command in commands:
+            params = command_params(*command)
+            for flag, help_text in helps.items():
+                assert params[flag].help.startswith(help_text.replace("\\[", "[")[:40]), (command, flag)
+
+
+def test_building_the_command_line_loads_neither_numpy_nor_torch():
+    """The flags' dataclasses live in modules free of numpy (choreo.lazy), so --help and a mistyped
+    flag answer at once."""
+    import subprocess
+    import sys
+
+    code = "import sys, choreo.cli.app; print(sorted({'numpy', 'torch', 'scipy'} & set(sys.modules)))"
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert loaded == "[]"
 
 
 def test_backend_flags_and_their_defaults_come_from_the_plugins_options():

@@ -6,7 +6,7 @@ import typer
 from typer.testing import CliRunner
 
 from choreo.cli.flags import flag_parameters, given_values, with_parameters
-from choreo.generator.options import option
+from choreo.options import option
 
 
 @dataclass(frozen=True, kw_only=True)

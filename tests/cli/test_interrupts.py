@@ -160,3 +160,24 @@ def test_an_ignored_sigint_stays_ignored_and_a_third_signal_ends_choreo_at_once(
         handler(signal.SIGTERM, None)
     assert received.signum == signal.SIGTERM and received.exit_code == 143
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # put back
+
+
+@pytest.mark.hardening
+@pytest.mark.parametrize("gap", [0.0, 0.05])
+def test_int_then_term_while_four_outputs_are_written_leave_none_of_them(tmp_path, gap):
+    """Round five, item 3: SIGINT after the first temporary file appears, then SIGTERM while the
+    first one unwinds: the second is ignored, every temporary removed, exit 130 with one line."""
+    song = Path(__file__).parents[2] / "examples" / "drum_and_bass_174bpm.wav"
+    outputs = [f"B.{ext}" for ext in ("bvh", "npz", "json", "glb")]
+    process = start(["generate", song, *(a for o in outputs for a in ("-o", o)), "--fps", "240", "--steps", "2",
+                     "--threads", "1"], tmp_path)
+    wait_for(lambda: any(p.name.startswith(".B.") for p in tmp_path.iterdir()), "the first temporary file")
+    process.send_signal(signal.SIGINT)
+    time.sleep(gap)
+    process.send_signal(signal.SIGTERM)
+    code, lines = finish(process)
+    if code == 0:  # the signals came after the last output was in place: nothing to clean up
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(outputs)
+        return
+    assert_interrupted(code, lines, 130, signal.SIGINT)
+    assert list(tmp_path.iterdir()) == []

@@ -11,7 +11,7 @@ from tests.helpers import EXAMPLE_SONG, assert_one_line_error, run_cli
 
 from choreo.errors import InputError, ParameterError
 from choreo.formats import read_motion
-from choreo.music import BEAT_COLUMN, SAMPLE_RATE, BeatSource, Music
+from choreo.music import BEAT_COLUMN, SAMPLE_RATE, BeatOptions, Music
 from choreo.music.beat_file import parse_beats, read_beat_file
 from tests.music.helpers import click_track
 
@@ -131,7 +131,7 @@ def test_the_python_entry_point_checks_its_beats_before_any_work():
 # --- the beats drive the analysis ----------------------------------------------------------------
 
 def test_bpm_gives_beats_exactly_its_period_apart_on_the_onsets(click_song):
-    music = Music.from_file(click_song, timbre=False, beats=BeatSource.from_options(bpm=100))
+    music = Music.from_file(click_song, timbre=False, beats=BeatOptions(bpm=100).source())
     np.testing.assert_allclose(np.diff(music.beat_times), 0.6, atol=1e-9)  # not the clicks' 0.5 s
     assert music.tempo == 100 and music.beat_source == "bpm 100" and len(music.beat_times) >= 10
     clicks = np.arange(0.0, 8.0, 60.0 / CLICK_BPM)
@@ -144,7 +144,7 @@ def test_bpm_gives_beats_exactly_its_period_apart_on_the_onsets(click_song):
 def test_given_beats_fill_the_features_beat_column(tmp_path, click_song):
     times = np.arange(0.3, 7.5, 0.7)
     (tmp_path / "beats.txt").write_text("\n".join(f"{t:.3f}" for t in times))
-    music = Music.from_file(click_song, timbre=False, beats=BeatSource.from_options(beats=tmp_path / "beats.txt"))
+    music = Music.from_file(click_song, timbre=False, beats=BeatOptions(beats=tmp_path / "beats.txt").source())
     np.testing.assert_allclose(music.beat_times, times, atol=1e-9)
     np.testing.assert_array_equal(np.flatnonzero(music.features[:, BEAT_COLUMN]), np.round(times * 30).astype(int))
     assert music.tempo == pytest.approx(60 / 0.7) and music.beat_source == "beats.txt"

@@ -6,8 +6,8 @@ import pytest
 
 from choreo.errors import MotionFormatError, ParameterError
 from choreo.motion import Motion
-from choreo.motion.delivery import (ROOT_BONE, at_fps, check_fps, check_travel, delivered, floor_height, in_place,
-                                    with_root_bone)
+from choreo.motion.delivery import ROOT_BONE, at_fps, delivered, floor_height, in_place, with_root_bone
+from choreo.motion.delivery_options import check_fps, check_travel
 from choreo.motion.filters import low_pass
 from choreo.motion.travel import ground_track
 from choreo.skeleton import SMPL24, Skeleton, quaternion_multiply, quaternion_to_matrix
@@ -145,3 +145,17 @@ def test_in_place_and_root_motion_are_refused_together():
     check_travel(False, True)
     with pytest.raises(ParameterError, match="^--in-place and --root-motion exclude each other"):
         check_travel(True, True)
+
+
+def test_delivery_is_checked_when_made_and_delivers_as_delivered():
+    from choreo.errors import ParameterError
+    from choreo.motion.delivery_options import Delivery
+
+    with pytest.raises(ParameterError, match="--fps must be 10 to 240, got 5"):
+        Delivery(fps=5)
+    with pytest.raises(ParameterError, match="exclude each other"):
+        Delivery(in_place=True, root_motion=True)
+    motion = circling_dancer(4.0)
+    at_60 = Delivery(fps=60, in_place=True).of(motion)
+    expected = delivered(motion, 60, True)
+    assert at_60.fps == 60 and np.array_equal(at_60.root_positions, expected.root_positions)

@@ -9,7 +9,7 @@ from tests.helpers import AISTPP_FIXTURES, EXAMPLE_SONG, assert_one_line_error, 
 
 from choreo.errors import ParameterError
 from choreo.formats import read_motion
-from choreo.music import BEAT_COLUMN, SAMPLE_RATE, BeatSource, Music
+from choreo.music import BEAT_COLUMN, SAMPLE_RATE, BeatOptions, Music
 from choreo.music import madmom_tracker
 from tests.music.helpers import click_track
 
@@ -110,7 +110,7 @@ def test_the_help_names_the_licence(capsys):
 
 @needs_madmom
 def test_madmom_hears_a_click_track_at_its_tempo(click_song):
-    music = Music.from_file(click_song, timbre=False, beats=BeatSource.from_options(tracker="madmom"))
+    music = Music.from_file(click_song, timbre=False, beats=BeatOptions(beat_tracker="madmom").source())
     clicks = np.arange(0.0, 12.0, 60.0 / CLICK_BPM)
     assert music.tempo == pytest.approx(CLICK_BPM, rel=0.04)
     assert np.abs(music.beat_times[:, None] - clicks[None]).min(axis=1).max() < 0.05  # every beat on a click
@@ -122,7 +122,7 @@ def test_madmom_hears_a_click_track_at_its_tempo(click_song):
 
 @needs_madmom
 def test_an_excerpt_is_tracked_in_its_own_time(click_song):
-    music = Music.from_file(click_song, start=3.25, end=9.0, timbre=False, beats=BeatSource.from_options(tracker="madmom"))
+    music = Music.from_file(click_song, start=3.25, end=9.0, timbre=False, beats=BeatOptions(beat_tracker="madmom").source())
     clicks = np.arange(0.0, 12.0, 60.0 / CLICK_BPM) - 3.25
     assert music.beat_times.max() <= music.duration + 0.05 and music.beat_times.min() >= 0
     assert np.abs(music.beat_times[:, None] - clicks[None]).min(axis=1).max() < 0.05
@@ -131,8 +131,8 @@ def test_an_excerpt_is_tracked_in_its_own_time(click_song):
 @needs_madmom
 def test_an_array_is_tracked_like_a_file(click_song):
     samples, sr = sf.read(click_song, dtype="float32")
-    from_array = Music.from_array(samples, sr, timbre=False, beats=BeatSource.from_options(tracker="madmom"))
-    from_file = Music.from_file(click_song, timbre=False, beats=BeatSource.from_options(tracker="madmom"))
+    from_array = Music.from_array(samples, sr, timbre=False, beats=BeatOptions(beat_tracker="madmom").source())
+    from_file = Music.from_file(click_song, timbre=False, beats=BeatOptions(beat_tracker="madmom").source())
     np.testing.assert_allclose(from_array.beat_times, from_file.beat_times, atol=0.011)  # one activation frame
 
 

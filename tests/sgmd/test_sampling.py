@@ -338,7 +338,7 @@ def test_sampling_options_refuse_what_the_sampler_cannot_use(field, value, words
     from choreo_sgmd.options import SamplingOptions
 
     from choreo.errors import ParameterError
-    from choreo.generator.options import parse_options
+    from choreo.options import parse_options
 
     with pytest.raises(ParameterError, match=words):
         parse_options("sgmd", SamplingOptions, {field: value})
@@ -370,7 +370,7 @@ def test_ddpm_without_steps_walks_the_whole_chain_and_steps_are_bounded():
     from choreo_sgmd.options import MAX_STEPS, SamplingOptions
 
     from choreo.errors import ParameterError
-    from choreo.generator.options import parse_options
+    from choreo.options import parse_options
 
     assert SamplingOptions(sampler="ddpm").on_chain(700, steps_given=False).steps == 700
     assert SamplingOptions(sampler="ddpm", steps=700).on_chain(700).steps == 700

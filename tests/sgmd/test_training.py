@@ -125,3 +125,22 @@ def test_holding_out_validation_needs_m2d_and_leaves_its_clips_out():
     train, held = _without_validation(clips)
     assert [c.name for c in train] == ["DANCE_C_6", "DANCE_W_1"]
     assert [c.name for c in held] == list(validation_clips())
+
+
+def test_a_generation_checkpoint_is_fine_tuned_from_its_ema_weights(tmp_path):
+    """`--init-from` a bundled-style checkpoint (EMA weights, float16, no optimiser): the run starts
+    from those weights as raw and average weights alike, the step count carries on, the optimiser is new."""
+    from choreo_sgmd.checkpoint import export_for_inference
+
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    subprocess.run(train_command(tmp_path / "first", "--steps", "10"), env=env, check=True, capture_output=True)
+    export_for_inference(tmp_path / "first" / "last.pt", tmp_path / "bundled.pt", half=True)
+    tuned = subprocess.run(train_command(tmp_path / "tuned", "--steps", "12", "--init-from", str(tmp_path / "bundled.pt")),
+                           env=env, capture_output=True, text=True)
+    assert tuned.returncode == 0, tuned.stderr[-2000:]
+    state = load_checkpoint(tmp_path / "tuned" / "last.pt")
+    assert state["step"] == 12 and state["started_from"] == {"checkpoint": "bundled.pt", "step": 10}
+    assert all(len(moments) == 0 or moments["step"] == 2 for moments in state["optimizer"]["state"].values())
+    start = load_checkpoint(tmp_path / "bundled.pt")["ema_state_dict"]
+    moved = max(float((state["state_dict"][key] - start[key].float()).abs().max()) for key in start)
+    assert 0 < moved < 0.05  # two steps of AdamW from the bundled weights, not from a fresh network

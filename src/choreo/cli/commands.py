@@ -7,8 +7,9 @@ from typing import Optional
 
 import typer
 
-from .dancing import BEAT_TRACKER, BEATS, BPM, IN_PLACE, ROOT_MOTION
-from .numbers import Number
+from ..motion.delivery_options import Delivery
+from ..music.beat_options import BeatOptions
+from .flags import flag_parameters, given_values, with_parameters
 from .progress import progress_bar, stderr_console, stdout_console
 from .text import markup
 
@@ -29,7 +30,7 @@ def _require_file(path: Path) -> Path:
 
 def info(
     path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json, glb; - reads stdin) or an audio file."),
-    bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
+    **flags,
 ) -> None:
     """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats).
 
@@ -47,12 +48,11 @@ def info(
     from ..errors import ParameterError
 
     is_song = path.suffix.lower() in AUDIO_EXTENSIONS
-    if not is_song and (bpm is not None or beats is not None or beat_tracker != "choreo"):
+    beat_options = BeatOptions(**given_values(BeatOptions, flags))
+    if not is_song and beat_options.given:
         raise ParameterError("--bpm, --beats and --beat-tracker describe a song, not a motion file")
     if is_song:
-        from ..music import BeatSource
-
-        source = BeatSource.from_options(bpm, beats, beat_tracker)
+        source = beat_options.source()
     from rich.table import Table
 
     table = Table(show_header=False, box=None)
@@ -87,6 +87,9 @@ def info(
     stdout_console.print(table)
 
 
+with_parameters(info, flag_parameters(BeatOptions, given_only=False))
+
+
 def _first_times(times, shown: int = 8) -> str:
     """'0.52 0.87 1.22 ... s': the first beats, enough to check them against a DAW."""
     if len(times) == 0:
@@ -99,9 +102,7 @@ def convert(
     source: Path = typer.Argument(..., help="Input motion: .bvh, .npz (AIST++ keys), .pkl (AIST++), .json, .glb; - reads stdin."),
     target: str = typer.Argument(..., help="Output path, or - for stdout (needs --format)."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension."),
-    fps: Optional[float] = typer.Option(None, parser=Number("--fps"), help="Resample to this frame rate (10 to 240)."),
-    rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo."),
-    in_place: bool = IN_PLACE, root_motion: bool = ROOT_MOTION,
+    **flags,
 ) -> None:
     """Convert a motion between BVH, NPZ, AIST++ pkl, JSON, joint-position .npy, glTF (.glb) and FBX.
 
@@ -116,16 +117,12 @@ def convert(
     from ..formats import check_output_format, read_motion, write_motion
     from ..fileio import check_outputs_apart
     from ..formats.registry import dropped_metadata
-    from ..motion.delivery import check_fps, check_travel, delivered
 
-    if fps is not None:
-        check_fps(fps)  # the range every command takes, before resampling allocates the frames
-    check_travel(in_place, root_motion)
-    check_output_format(target, format, rig, root_motion)  # a bad target or rig refused before reading anything
+    delivery = Delivery(**given_values(Delivery, flags))  # the frame rate's range before resampling allocates frames
+    check_output_format(target, format, delivery.rig, delivery.root_motion)  # a bad target or rig before any reading
     check_outputs_apart([target], [source])
-    motion = read_motion(_require_file(source))
-    motion = delivered(motion, fps, in_place)
-    written = write_motion(motion, target, format=format, rig=rig, root_motion=root_motion)
+    motion = delivery.of(read_motion(_require_file(source)))
+    written = write_motion(motion, target, format=format, rig=delivery.rig, root_motion=delivery.root_motion)
     dropped = dropped_metadata(motion, target, format)
     if dropped:
         from . import print_note
@@ -136,6 +133,9 @@ def convert(
     if target != "-":
         stderr_console.print(f"wrote {markup(written)} ({motion.num_frames} frames at {motion.fps:g} fps)",
                              highlight=False)
+
+
+with_parameters(convert, flag_parameters(Delivery, given_only=False))
 
 
 def generators() -> None:

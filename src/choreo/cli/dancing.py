@@ -7,89 +7,50 @@ from __future__ import annotations
 import functools
 import inspect
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Optional
+from typing import Any, Callable, Optional
 
 import typer
 
 from ..finishing import Finishing
-from ..generator.base import MAX_SEED
+from ..motion.delivery_options import Delivery
+from ..music.beat_options import BeatOptions
+from ..pipeline import DanceRequest
 from .flags import flag_parameters, given_values, with_parameters
-from .numbers import Number
 from .progress import progress_bar, stderr_console
 from .text import markup
-
-if TYPE_CHECKING:
-    from ..pipeline import DanceRequest
 
 SONG = typer.Argument(..., help="Audio file: wav, mp3, ogg, flac or opus.")
 OUTPUT = typer.Option(..., "-o", "--output",
                       help="Output motion file (.bvh, .npz, .json, .npy, .glb, .fbx) or - for stdout; repeat for several.")
 GENERATOR = typer.Option("sgmd", help="Backend (see choreo generators).")
 PREVIEW = typer.Option(False, "--preview", help="Also render OUTPUT-stem.mp4 (the dancer with the music) beside the output.")
-BPM = typer.Option(None, "--bpm", parser=Number("--bpm"), help="The song's tempo, if you know it: beats exactly 60/BPM s "
-                                                                "apart, placed on the song's onsets (default: the tracker's tempo).")
-BEATS = typer.Option(None, "--beats", help="Beat times to dance to: seconds one a line, or a CSV with a header "
-                                           "(time\\[,downbeat]) as DAWs and beat trackers export.")
-FPS = typer.Option(None, "--fps", parser=Number("--fps"), help="Write the dance at this frame rate, e.g. 24, 60 or 120 "
-                   "(default: the backend's, 30): resampled after the finishing passes, so beats and steps keep their times.")
-IN_PLACE = typer.Option(False, "--in-place", help="Take the travel out: the dancer stays where it started, its sway, "
-                        "height and facing kept (for a game engine that moves the character itself).")
-ROOT_MOTION = typer.Option(False, "--root-motion", help="Write .bvh/.glb/.fbx under a root bone at floor level that "
-                           "carries the travel and the facing, the hips moving relative to it (game engines' root motion).")
 LOOP = typer.Option(False, "--loop", help="A dance that loops, for emotes and idle dances: the song's whole bars from its "
                     "start, led back into its own opening (the turn and travel per cycle are in the file's metadata).")
-BEAT_TRACKER = typer.Option("choreo", "--beat-tracker",
-                            help="Who hears the beats: choreo (licence-clean) or madmom (pip install "
-                                 "\"choreo\\[madmom]\"; its models are CC BY-NC-SA 4.0: non-commercial use only).")
 
 
 def shared_options(
-    style: Optional[str] = typer.Option(None, help="Genre (waltz, rumba, ...), its index, free text, or a schedule "
-                                                   "0:30=waltz,30:=cha-cha."),
     checkpoint: Optional[Path] = typer.Option(None, help="Trained checkpoint (from choreo train); default: the bundled one."),
-    seed: int = typer.Option(0, parser=Number("--seed", -MAX_SEED, MAX_SEED, whole=True),
-                             help="Random seed: same seed, same dance (the graph: another walk, another take)."),
     format: Optional[str] = typer.Option(None, "--format", "-f", help="Output format; default from the extension "
                                          "(generate --out-dir: a list like bvh,npz)."),
-    rig: Optional[str] = typer.Option(None, "--rig", help="Write .bvh/.fbx on another rig's bones and T-pose: mixamo "
-                                                         "(default: SMPL-24)."),
-    bpm: Optional[float] = BPM, beats: Optional[Path] = BEATS, beat_tracker: str = BEAT_TRACKER,
-    threads: Optional[int] = typer.Option(None, "--threads", min=1, help="CPU threads to dance with (default: the CPUs "
-                                          "this job may use that other work leaves idle; OMP_NUM_THREADS is honoured). "
-                                          "Set it for bit-identical reruns: other thread counts round differently."),
-    fps: Optional[float] = FPS, in_place: bool = IN_PLACE, root_motion: bool = ROOT_MOTION,
 ) -> None:
-    """The options every dancing command takes (its signature is what counts)."""
+    """The options every dancing command takes besides the request's, the beats', the delivery's,
+    the finishing passes' and the backend's (its signature is what counts)."""
 
 
 @dataclass(frozen=True, kw_only=True)
 class DanceFlags:
-    """A dancing command's shared flags, as parsed."""
+    """A dancing command's shared flags, as parsed; each group is the dataclass that declares it."""
 
     generator: str
-    style: str | None
     checkpoint: Path | None
-    seed: int
     format: str | None
-    rig: str | None
-    bpm: float | None
-    beats: Path | None
-    beat_tracker: str
-    threads: int | None
-    fps: float | None  # the files' frame rate; None: the dance's own
-    in_place: bool  # the files without the travel
-    root_motion: bool  # the files with the travel on a root bone
+    asked: dict[str, Any]  # DanceRequest's own flags given (style, seed, threads)
+    beats: BeatOptions
+    delivery: Delivery
     finishing: Finishing
     options: dict[str, Any]  # the backend option flags given; the rest: the backend's defaults
-
-    def __post_init__(self):
-        from ..motion.delivery import check_fps, check_travel
-
-        if self.fps is not None:
-            check_fps(self.fps)
-        check_travel(self.in_place, self.root_motion)
 
     def outputs(self, paths: list[str], preview: bool = False, format: bool = True, fps: float | None = None,
                 inputs: tuple = ()) -> "Outputs":
@@ -97,34 +58,25 @@ class DanceFlags:
         ``fps``: the rate of the motion the dance continues or edits, which --fps overrides;
         ``inputs``: the files it reads besides the song, none of which it may write over)."""
         from ..errors import ParameterError
-        from ..motion.delivery import MAX_DELIVERY_FPS, MIN_DELIVERY_FPS
+        from ..motion.delivery_options import MAX_DELIVERY_FPS, MIN_DELIVERY_FPS
 
-        if self.fps is None and fps is not None and not MIN_DELIVERY_FPS <= fps <= MAX_DELIVERY_FPS:
-            raise ParameterError(f"the given motion is at {fps:g} fps: give --fps ({MIN_DELIVERY_FPS:g} to "
-                                 f"{MAX_DELIVERY_FPS:g}) for the dance")
-        return Outputs(paths=paths, format=self.format if format else None, rig=self.rig, preview=preview,
-                       fps=self.fps if self.fps is not None else fps, in_place=self.in_place,
-                       root_motion=self.root_motion, inputs=[*inputs, self.beats, self.checkpoint])
+        delivery = self.delivery
+        if delivery.fps is None and fps is not None:
+            if not MIN_DELIVERY_FPS <= fps <= MAX_DELIVERY_FPS:
+                raise ParameterError(f"the given motion is at {fps:g} fps: give --fps ({MIN_DELIVERY_FPS:g} to "
+                                     f"{MAX_DELIVERY_FPS:g}) for the dance")
+            delivery = replace(delivery, fps=fps)
+        return Outputs(paths=paths, format=self.format if format else None, delivery=delivery, preview=preview,
+                       inputs=[*inputs, self.beats.beats, self.checkpoint])
 
     def request(self, constrained: bool = False, loop: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not
         take, a value it refuses, unreadable --beats, constraints it cannot keep."""
-        from ..errors import ParameterError
-        from ..generator.options import option_names
-        from ..music import BeatSource
         from ..pipeline import Backend, DanceRequest
 
         backend = Backend(self.generator, self.checkpoint, **factory_options)
-        takes = option_names(backend.plugin.options) if backend.plugin.options else []
-        foreign = [name for name in self.options if name not in takes]
-        if foreign:
-            flags = ", ".join(f"--{name.replace('_', '-')}" for name in foreign)
-            raise ParameterError(f"{flags} {'is not an option' if len(foreign) == 1 else 'are not options'} of "
-                                 f"{self.generator} (its options: {', '.join(takes) or 'none'})")
-        beats = BeatSource.from_options(self.bpm, self.beats, self.beat_tracker)
-        return DanceRequest(backend=backend, style=self.style,
-                            seed=self.seed, options=self.options, finishing=self.finishing, beats=beats,
-                            threads=self.threads, constrained=constrained, loop=loop)
+        return DanceRequest(backend=backend, **self.asked, options=self.options, finishing=self.finishing,
+                            beats=self.beats.source(), constrained=constrained, loop=loop)
 
 
 def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
@@ -136,7 +88,9 @@ def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
 
     plugin = available_plugins().get(backend)
     options_type = plugin.options if plugin is not None else None
-    extra = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) for p in inspect.signature(shared_options, eval_str=True).parameters.values()]
+    extra = flag_parameters(DanceRequest, given_only=False)
+    extra += [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) for p in inspect.signature(shared_options, eval_str=True).parameters.values()]
+    extra += flag_parameters(Delivery, given_only=False) + flag_parameters(BeatOptions, given_only=False)
     if choose_generator:
         extra.append(inspect.Parameter("generator", inspect.Parameter.KEYWORD_ONLY, default=GENERATOR, annotation=str))
     extra += flag_parameters(Finishing, given_only=False, panel="Finishing passes")
@@ -145,10 +99,12 @@ def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
     def decorate(command: Callable) -> Callable:
         @functools.wraps(command)
         def run(**values):
-            finishing = Finishing(**given_values(Finishing, values))
-            options = given_values(options_type, values) if options_type else {}
-            shared = {name: values.pop(name) for name in inspect.signature(shared_options).parameters}
-            flags = DanceFlags(generator=values.pop("generator", backend), finishing=finishing, options=options, **shared)
+            flags = DanceFlags(generator=values.pop("generator", backend), asked=given_values(DanceRequest, values),
+                               beats=BeatOptions(**given_values(BeatOptions, values)),
+                               delivery=Delivery(**given_values(Delivery, values)),
+                               finishing=Finishing(**given_values(Finishing, values)),
+                               options=given_values(options_type, values) if options_type else {},
+                               **{name: values.pop(name) for name in inspect.signature(shared_options).parameters})
             return command(**values, dance=flags)
 
         own = [p for p in inspect.signature(command, eval_str=True).parameters.values() if p.name != "dance"]
@@ -164,11 +120,8 @@ class Outputs:
 
     paths: list[str]  # files, or - for stdout
     format: str | None = None  # overrides the extension (one output)
-    rig: str | None = None
+    delivery: Delivery = Delivery()  # frame rate, travel, rig
     preview: bool = False  # also an MP4 with the music beside the first file
-    fps: float | None = None  # written at this frame rate (choreo.motion.delivery.at_fps)
-    in_place: bool = False  # written without the travel (choreo.motion.delivery.in_place)
-    root_motion: bool = False  # written under a root bone (choreo.motion.delivery.with_root_bone)
     inputs: list = field(default_factory=list)  # files read besides the song (None: not given)
 
     @property
@@ -188,14 +141,13 @@ class Outputs:
         for path in self.paths:
             if path != "-":
                 output_target(path)  # a writable folder, and nothing there that is not a regular file
-            check_output_format(path, self.format, self.rig, self.root_motion)
+            check_output_format(path, self.format, self.delivery.rig, self.delivery.root_motion)
         check_outputs_apart(self.paths + [self.preview_path] * bool(self.preview_path), [song, *self.inputs])
 
 
 def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints: Callable | None = None) -> dict:
     """Dance one song, write every output atomically, print a line; a summary for --json."""
     from ..formats import write_motions
-    from ..motion.delivery import delivered
 
     outputs.check(song)
     with progress_bar(f"analysing {song.name}") as update:
@@ -205,7 +157,7 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
     with progress_bar("dancing", 100) as update:
         motion = request.dance(music, fixed, progress=lambda fraction: update(round(fraction * 100), 100))
     seconds = time.perf_counter() - started
-    motion = delivered(motion, outputs.fps, outputs.in_place)
+    motion = outputs.delivery.of(motion)
     meta = motion.metadata
     if meta.get("style_notice"):
         stderr_console.print(f"[yellow]note:[/yellow] {markup(meta['style_notice'])}", highlight=False)
@@ -215,9 +167,10 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
         from ..render import RenderConfig
         from .preview import render_preview
 
-        companions[outputs.preview_path] = lambda temporary: render_preview(motion, temporary, RenderConfig(), song)
-    write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.rig, companions=companions,
-                  root_motion=outputs.root_motion)
+        companions[outputs.preview_path] = lambda temporary: render_preview(motion, Path(outputs.preview_path),
+                                                                            RenderConfig(), song, into=temporary)
+    write_motions(motion, outputs.paths, format=outputs.format, rig=outputs.delivery.rig, companions=companions,
+                  root_motion=outputs.delivery.root_motion)
     written += list(companions)
     if written:
         kept = f", {fixed.describe()}" if fixed else ""

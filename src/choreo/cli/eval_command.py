@@ -70,7 +70,7 @@ def evaluate(
     from ..metrics import MetricWarning
     from ..metrics import evaluate as run_evaluation
     from ..metrics.evaluate import collect_motion_files
-    from ..motion.delivery import check_fps
+    from ..motion.delivery_options import check_fps
     from .text import markup
 
     if up not in ("y", "z"):

@@ -1,6 +1,6 @@
 """Command-line flags made from settings dataclasses, so each option is declared once.
 
-A field made with :func:`choreo.generator.options.option` carries its help and flag names; its
+A field made with :func:`choreo.options.option` carries its help and flag names; its
 default is the field's. :func:`flag_parameters` turns a dataclass's such fields into typer
 parameters (for a command's signature, see :func:`with_parameters`) and :func:`given_values`
 reads them back, leaving out the ones not given, so the dataclass's own defaults apply.
@@ -9,6 +9,7 @@ reads them back, leaving out the ones not given, so the dataclass's own defaults
 from __future__ import annotations
 
 import inspect
+import sys
 import types
 import typing
 from dataclasses import Field
@@ -17,7 +18,7 @@ from typing import Any, Callable, Optional
 
 import typer
 
-from ..generator.options import FLAG, field_default, flag_fields
+from ..options import FLAG, field_default, flag_fields
 from .numbers import Number
 
 
@@ -28,14 +29,14 @@ def flag_parameters(options_type: type, defaults: dict | None = None, given_only
     shows the field's default, or what a None default stands for: ``defaults`` (a field's name to
     its value) or the flag's ``default_text``. Without, the flag's default is the field's. ``panel``:
     the heading help lists them under."""
-    hints = typing.get_type_hints(options_type)
+    hints = _flag_hints(options_type)
     return [_parameter(f, hints[f.name], (defaults or {}).get(f.name), given_only, panel) for f in flag_fields(options_type)]
 
 
 def given_values(options_type: type, values: dict[str, Any]) -> dict[str, Any]:
     """The flag fields of ``options_type`` taken out of ``values`` (a command's arguments), those
     not given left out; comma lists become tuples of numbers."""
-    hints, given = typing.get_type_hints(options_type), {}
+    hints, given = _flag_hints(options_type), {}
     for f in flag_fields(options_type):
         value = values.pop(f.name)
         if value is not None:
@@ -52,6 +53,14 @@ def with_parameters(command: Callable, extra: list[inspect.Parameter]) -> Callab
     return command
 
 
+def _flag_hints(options_type: type) -> dict[str, Any]:
+    """The types of ``options_type``'s flag fields. Only theirs: a request's other fields may name
+    types its module imports for type checkers alone, which ``typing.get_type_hints`` cannot resolve."""
+    namespace = vars(sys.modules[options_type.__module__])
+    return {f.name: eval(f.type, namespace) if isinstance(f.type, str) else f.type  # noqa: S307 - the module's own annotation
+            for f in flag_fields(options_type)}
+
+
 def _parameter(f: Field, hint, shown_default, given_only: bool, panel: str | None) -> inspect.Parameter:
     flag = f.metadata[FLAG]
     default = field_default(f)
@@ -62,8 +71,8 @@ def _parameter(f: Field, hint, shown_default, given_only: bool, panel: str | Non
     shown = flag.default_text or (None if shown_default is None else _shown(shown_default))
     help_text = flag.help + (f" \\[default: {shown}]" if default is None and shown is not None else "")
     extra: dict[str, Any] = {}
-    if kind is float:
-        extra["parser"] = Number(names[0].split("/")[0])
+    if kind is float or (kind is int and flag.bounds):
+        extra["parser"] = Number(names[0].split("/")[0], *(flag.bounds or ()), whole=kind is int)
     if flag.existing_file:
         kind, extra = Path, {"exists": True, "dir_okay": False}
     if kind is tuple:  # a comma list, read by given_values

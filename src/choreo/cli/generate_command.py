@@ -72,7 +72,7 @@ def generate(
     if output is not None and len(songs) > 1:
         raise ParameterError(f"{len(songs)} songs need --out-dir, not -o")
     if out_dir is not None:
-        formats = batch_formats(dance.format, dance.rig)
+        formats = batch_formats(dance.format, dance.delivery.rig)
         stems = Counter(song.stem for song in songs)
         clashes = sorted(stem for stem, count in stems.items() if count > 1)
         if clashes:

@@ -26,8 +26,7 @@ class Number:
     def __call__(self, value):
         number = self._parsed(value) if isinstance(value, str) else value
         if number is not None and not self.low <= number <= self.high:  # NaN fails too
-            raise ParameterError(f"{self.flag} must be {_text(self.low)} to {_text(self.high)}, "
-                                 f"got {shown(_text(number))}")
+            raise ParameterError(f"{self.flag} must be {_range(self.low, self.high)}, got {shown(_text(number))}")
         return number
 
     def _parsed(self, text: str) -> float:
@@ -36,6 +35,12 @@ class Number:
             kind = "a whole number" if self.whole else "a finite number"
             raise ParameterError(f"{self.flag} takes {kind}, got {shown(text)}")
         return number
+
+
+def _range(low: float, high: float) -> str:
+    if high == math.inf:
+        return f"at least {_text(low)}"
+    return f"at most {_text(high)}" if low == -math.inf else f"{_text(low)} to {_text(high)}"
 
 
 def _text(number: float) -> str:

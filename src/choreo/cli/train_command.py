@@ -60,7 +60,7 @@ def training_command(plugin):
     ) -> None:
         from ..errors import ParameterError
         from ..fileio import check_output_folder
-        from ..generator.options import parse_options
+        from ..options import parse_options
 
         if not data.is_dir():
             raise ParameterError(f"--data {data} is not a folder")

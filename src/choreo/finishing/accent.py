@@ -1,8 +1,8 @@
 """Accent: ease into and out of every motion beat, as an animator times a hit.
 
 Generated dances mark their motion beats less than real dancers do: the dip in joint speed at a
-beat is about 0.7 x real's on whole songs, less on waltz (docs/results.md, "Whole songs"). The
-model's beats are there, only soft. This pass re-times the dance between each two consecutive
+beat is shallower than real's on whole songs, most of all on waltz (docs/results.md, "Whole
+songs"). The model's beats are there, only soft. This pass re-times the dance between each two consecutive
 motion beats a and b so that it plays at ``1 - depth`` of its speed at the beats and ``1 + depth``
 halfway between, a raised cosine whose mean is 1: every motion beat stays on its frame (the
 playback is slowest exactly there, so a minimum of the joint speed stays a minimum), and so does

@@ -51,10 +51,9 @@ class FootstepsConfig:
 
 
 # How far each ankle goes from where the dance puts it to where the plan does. All the way, feet stand far
-# more often than real dancers' and FID_g rises. Real Latin dancers' feet follow the body about half as
-# much as waltz dancers' (foot~root, median over the train split: cha-cha 0.21, rumba 0.33, waltz 0.53; `python
-# scripts/real_speed_limits.py`), so a Latin dance takes more of the plan. Both shares chosen on the validation
-# clips: docs/results.md, "Feet".
+# more often than real dancers' and FID_g rises. Real Latin dancers' feet follow the body less than waltz
+# dancers' (foot~root over the train split: `python scripts/real_speed_limits.py`), so a Latin dance takes
+# more of the plan. Both shares chosen on the validation clips: docs/results.md, "Feet".
 GENRE_STRENGTH = {"cha-cha": 0.75, "rumba": 0.75}
 DEFAULT_STRENGTH = 0.65  # any other genre, a free-text style, a schedule of styles, no style
 

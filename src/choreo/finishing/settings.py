@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from ..generator.options import option
+from ..options import option
 
 
 @dataclass(frozen=True, kw_only=True)

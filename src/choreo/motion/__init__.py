@@ -1,13 +1,12 @@
-"""The `Motion` type, foot contacts and the 151-d frame vector."""
+"""The `Motion` type, foot contacts and the 151-d frame vector (each name loads its module on
+first use: choreo.lazy)."""
 
-from .augment import mirrored, stretched, turned
-from .beats import mean_joint_speed, motion_beats
-from .contacts import CONTACT_SPEED_THRESHOLD, foot_contacts
-from .motion import DEFAULT_FPS, Motion, positions_at, source_name
-from .vector import FRAME_DIM, motion_to_vector, vector_to_motion
+from ..lazy import lazy_exports
 
-__all__ = [
-    "CONTACT_SPEED_THRESHOLD", "DEFAULT_FPS", "FRAME_DIM", "Motion", "foot_contacts", "source_name",
-    "mean_joint_speed", "mirrored", "motion_beats", "motion_to_vector", "positions_at", "stretched", "turned",
-    "vector_to_motion",
-]  # fmt: skip
+__getattr__, __all__ = lazy_exports(__name__, {
+    "augment": ("mirrored", "stretched", "turned"),
+    "beats": ("mean_joint_speed", "motion_beats"),
+    "contacts": ("CONTACT_SPEED_THRESHOLD", "foot_contacts"),
+    "motion": ("DEFAULT_FPS", "Motion", "positions_at", "source_name"),
+    "vector": ("FRAME_DIM", "motion_to_vector", "vector_to_motion"),
+})

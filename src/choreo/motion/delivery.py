@@ -20,7 +20,6 @@ from .seam import CLOSING_SECONDS, closed, next_cycle
 from .stitch import rotate_about_y
 from .travel import FLOOR_AXES, TRACK_CUTOFF_HZ, ground_track
 
-MIN_DELIVERY_FPS, MAX_DELIVERY_FPS = 10.0, 240.0  # the rates --fps takes (film 24 to mocap 120, and a margin)
 ALIASING_MARGIN = 0.8  # share of the new Nyquist frequency kept when the rate falls
 IN_PLACE_REACH = 0.02  # metres the ground track of an in-place dance may stray from its start
 IN_PLACE_ROUNDS = 3
@@ -57,23 +56,6 @@ def delivered_loop(motion: Motion, fps: float | None = None, without_travel: boo
         motion = around.sample_frames(np.arange(count) * motion.num_frames / count).replace(
             fps=float(fps), metadata=dict(motion.metadata, loop=loop))
     return closed(motion, int(round(CLOSING_SECONDS * motion.fps))) if changed else motion
-
-
-def check_fps(fps: float) -> None:
-    """Refuse, in one line, a frame rate a file is not written at."""
-    from ..errors import ParameterError
-
-    if not MIN_DELIVERY_FPS <= fps <= MAX_DELIVERY_FPS:
-        raise ParameterError(f"--fps must be {MIN_DELIVERY_FPS:g} to {MAX_DELIVERY_FPS:g}, got {fps:g}")
-
-
-def check_travel(in_place: bool, root_motion: bool) -> None:
-    """Refuse, in one line, both ways of handing the travel to an engine at once."""
-    from ..errors import ParameterError
-
-    if in_place and root_motion:
-        raise ParameterError("--in-place and --root-motion exclude each other: one takes the travel out, "
-                             "the other moves it onto a root bone")
 
 
 def at_fps(motion: Motion, fps: float) -> Motion:

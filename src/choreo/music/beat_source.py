@@ -10,18 +10,13 @@ backend needs to know where they came from.
 
 from __future__ import annotations
 
-import math
-import os
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import InputError, ParameterError
-from .beat_file import BeatFile, read_beat_file
+from ..errors import InputError
+from .beat_file import BeatFile
 from .beats import beats_at_tempo, estimate_beats
-
-MIN_BPM, MAX_BPM = 20.0, 300.0  # a tempo outside is a typo, not a dance
-TRACKERS = ("choreo", "madmom")  # choreo's own (licence-clean, the default); madmom's RNN (non-commercial)
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,28 +26,6 @@ class BeatSource:
     bpm: float | None = None
     given: BeatFile | None = None
     tracker: str = "choreo"  # whose tracker hears the beats when neither bpm nor given is set
-
-    @classmethod
-    def from_options(cls, bpm: float | None = None, beats: str | os.PathLike | None = None,
-                     tracker: str = "choreo") -> "BeatSource":
-        """The source for ``--bpm`` / ``--beats`` / ``--beat-tracker`` (default: choreo's tracker),
-        checked before any work (madmom: that it is installed)."""
-        if bpm is not None and beats is not None:
-            raise ParameterError("give --bpm or --beats, not both")
-        if tracker not in TRACKERS:
-            raise ParameterError(f"--beat-tracker must be one of {', '.join(TRACKERS)}, got {tracker!r}")
-        if tracker != "choreo":
-            if bpm is not None or beats is not None:
-                raise ParameterError("--bpm and --beats replace the tracker: give them without --beat-tracker")
-            from .madmom_tracker import load_madmom
-
-            load_madmom()
-            return cls(tracker=tracker)
-        if bpm is not None:
-            if not (math.isfinite(bpm) and MIN_BPM <= bpm <= MAX_BPM):
-                raise ParameterError(f"--bpm must be {MIN_BPM:g} to {MAX_BPM:g}, got {bpm:g}")
-            return cls(bpm=float(bpm))
-        return cls(given=read_beat_file(beats)) if beats is not None else cls()
 
     @property
     def label(self) -> str:

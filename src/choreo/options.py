@@ -3,7 +3,8 @@ user or script passes is checked against the dataclass, by name, before any work
 
 A backend declares its generation options (``GeneratorPlugin.options``) and its training options
 (``GeneratorPlugin.train_options``) as dataclasses; the core declares the finishing passes
-(``choreo.finishing.Finishing``) the same way. Fields made with :func:`option` become command-line
+(``choreo.finishing.Finishing``), the request (``choreo.pipeline.DanceRequest``), the beat source
+(``choreo.music.BeatOptions``) and the delivery (``choreo.motion.delivery.Delivery``) the same way. Fields made with :func:`option` become command-line
 flags (``choreo.cli.flags``), their defaults read from the field, so no default is written twice.
 """
 
@@ -12,7 +13,7 @@ from __future__ import annotations
 from dataclasses import MISSING, Field, dataclass, field, fields
 from typing import Any, Mapping, TypeVar
 
-from ..errors import ParameterError
+from .errors import ParameterError
 
 Options = TypeVar("Options")
 FLAG = "choreo.flag"  # the metadata key of a field that is a command-line flag
@@ -26,12 +27,13 @@ class Flag:
     names: tuple[str, ...] = ()  # default: --field-name (a bool: --field-name/--no-field-name)
     existing_file: bool = False  # a path that must name a file (checked before any work)
     default_text: str | None = None  # what help shows as the default where the field's own is None
+    bounds: tuple[float, float] | None = None  # a number flag's range, refused while the flags are parsed
 
 
 def option(default: Any = None, help: str = "", *names: str, existing_file: bool = False,
-           default_text: str | None = None) -> Any:
+           default_text: str | None = None, bounds: tuple[float, float] | None = None) -> Any:
     """A dataclass field with ``default`` that is also the flag ``names`` (see :class:`Flag`)."""
-    flag = Flag(help, names, existing_file, default_text)
+    flag = Flag(help, names, existing_file, default_text, bounds)
     return field(default=default, metadata={FLAG: flag})
 
 

@@ -1,7 +1,7 @@
 """How much of each outside song is silence at its ends, and where the rest pass stops the dancer.
 
-    python scripts/quiet_ends.py            # the LMMS demo songs (benchmarks/outside_songs.py renders them)
-    python scripts/quiet_ends.py --dance    # also dance each (SGMD, defaults, seed 0) and read its metadata
+    python benchmarks/quiet_ends.py            # the LMMS demo songs (benchmarks/outside_songs.py renders them)
+    python benchmarks/quiet_ends.py --dance    # also dance each (SGMD, defaults, seed 0) and read its metadata
 
 For docs/results.md, "Finishing passes" (Rest). Silence is choreo.music.loudness.audible_span's:
 more than 40 dB under the song's loud level.
@@ -11,18 +11,16 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "benchmarks"))
-from outside_songs import outside_songs  # noqa: E402
+import choreo
+from choreo.motion.beats import mean_joint_speed
+from choreo.music import Music
+from choreo.skeleton.legs import LEGS
 
-import choreo  # noqa: E402
-from choreo.motion.beats import mean_joint_speed  # noqa: E402
-from choreo.skeleton.legs import LEGS  # noqa: E402
-from choreo.music import Music  # noqa: E402
+from outside_songs import outside_songs
+
 
 ANKLES = [leg[2] for leg in LEGS]  # the left and the right ankle, as footsteps (choreo.finishing.footsteps) names them
 
