@@ -73,12 +73,16 @@ class DiffusionConfig:
     root_speed_weight: float = 0.0  # the root's horizontal speed against the data's, in (m/s)^2, whatever the direction
     pace_weight: float = 0.0  # each window's pace along its smoothed floor path against the data's, in (m/s)^2
     legs_weight: float = 0.0  # knees, ankles and feet around the pelvis against the data's, weighted by alpha_bar(t)
+    legs_speed_weight: float = 0.0  # each window's mean speed of those joints around the pelvis against the data's, (m/s)^2
 
     def __post_init__(self):
         if self.contact_source not in CONTACT_SOURCES:
             raise ValueError(f"contact_source must be one of {CONTACT_SOURCES}, got {self.contact_source!r}")
-        if min(self.stepping_weight, self.foot_weight, self.root_speed_weight, self.pace_weight, self.legs_weight) < 0 or self.leg_weight <= 0:
-            raise ValueError("foot_weight, stepping_weight, root_speed_weight, pace_weight and legs_weight must be >= 0, leg_weight > 0")
+        terms = (self.stepping_weight, self.foot_weight, self.root_speed_weight, self.pace_weight, self.legs_weight,
+                 self.legs_speed_weight)
+        if min(terms) < 0 or self.leg_weight <= 0:
+            raise ValueError("foot_weight, stepping_weight, root_speed_weight, pace_weight, legs_weight and "
+                             "legs_speed_weight must be >= 0, leg_weight > 0")
         if not 0 < self.sigma_data <= 10:
             raise ValueError(f"sigma_data must be in (0, 10], got {self.sigma_data}")
         if self.snr_gamma < 0:

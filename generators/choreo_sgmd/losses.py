@@ -34,12 +34,14 @@ class LossTerms:
     root_speed: torch.Tensor  # the root's horizontal speed against the data's, in (m/s)^2
     pace: torch.Tensor  # each window's pace against the data's, in (m/s)^2
     legs: torch.Tensor  # knees, ankles and feet around the pelvis: positions in m^2 plus speeds in (m/s)^2
+    legs_speed: torch.Tensor  # each window's mean speed of those joints around the pelvis, in (m/s)^2
 
     def total(self, config: DiffusionConfig) -> torch.Tensor:
         total = (config.reconstruction_weight * self.reconstruction + config.velocity_weight * self.velocity
                  + config.joint_weight * self.joints + config.foot_weight * self.foot)
         for weight, term in ((config.stepping_weight, self.stepping), (config.root_speed_weight, self.root_speed),
-                             (config.pace_weight, self.pace), (config.legs_weight, self.legs)):
+                             (config.pace_weight, self.pace), (config.legs_weight, self.legs),
+                             (config.legs_speed_weight, self.legs_speed)):
             if weight:  # the terms most runs leave off
                 total = total + weight * term
         return total
@@ -85,12 +87,15 @@ def diffusion_losses(predicted: torch.Tensor, target: torch.Tensor, normalizer: 
     stepping = _per_window((feet_velocity - foot_velocity(target_joints)).mul(FPS).pow(2).sum(-1))
     root_speed = _per_window((horizontal_root_speed(predicted_motion) - horizontal_root_speed(target_motion)).pow(2))
     pace = (window_pace(predicted_motion) - window_pace(target_motion)).pow(2)
-    legs = legs_error(predicted_motion, predicted_joints, target_motion, target_joints)
+    predicted_legs = legs_around_pelvis(predicted_motion, predicted_joints)
+    target_legs = legs_around_pelvis(target_motion, target_joints)
+    legs = legs_error(predicted_legs, target_legs)
     if clean_share is not None:
         legs = legs * clean_share
+    legs_speed = (mean_speed(predicted_legs) - mean_speed(target_legs)).pow(2)
     weigh = (lambda term: term.mean()) if weights is None else (lambda term: (term * weights).mean())  # noqa: E731
     return LossTerms(weigh(reconstruction), weigh(velocity), weigh(joints), weigh(foot), weigh(stepping), weigh(root_speed),
-                     weigh(pace), weigh(legs))
+                     weigh(pace), weigh(legs), weigh(legs_speed))
 
 
 def legs_around_pelvis(vectors: torch.Tensor, joints: torch.Tensor) -> torch.Tensor:
@@ -105,17 +110,22 @@ def legs_around_pelvis(vectors: torch.Tensor, joints: torch.Tensor) -> torch.Ten
     return torch.stack((cos * x - sin * z, y, sin * x + cos * z), -1)
 
 
-def legs_error(predicted_motion: torch.Tensor, predicted_joints: torch.Tensor, target_motion: torch.Tensor,
-               target_joints: torch.Tensor) -> torch.Tensor:
-    """(B,) the legs around the pelvis against the data's: squared position error in m^2 plus squared
-    speed error in (m/s)^2. Why: the x0 term weighs a toe's rotation like a hip's and the joints term
-    is dominated by the root's travel, so neither sees a foot that rides on the body instead of
-    stepping (docs/sgmd.md, "Legs")."""
-    predicted = legs_around_pelvis(predicted_motion, predicted_joints)
-    target = legs_around_pelvis(target_motion, target_joints)
+def legs_error(predicted: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    """(B,) the legs around the pelvis (``legs_around_pelvis``, (B, T, 6, 3)) against the data's:
+    squared position error in m^2 plus squared speed error in (m/s)^2. Why: the x0 term weighs a
+    toe's rotation like a hip's and the joints term is dominated by the root's travel, so neither
+    sees a foot that rides on the body instead of stepping (docs/sgmd.md, "Legs")."""
     positions = _per_window((predicted - target).pow(2))
     speeds = _per_window(((predicted[:, 1:] - predicted[:, :-1]) - (target[:, 1:] - target[:, :-1])).mul(FPS).pow(2))
     return positions + speeds
+
+
+def mean_speed(points: torch.Tensor) -> torch.Tensor:
+    """(B, T, P, 3) points in m -> (B,) each window's mean speed in m/s. A speed, not a velocity: where
+    the network cannot tell when a foot moves, the velocity a squared error pulls towards is a foot
+    standing still, while the mean speed is the data's (as ``horizontal_root_speed`` for the root)."""
+    step = (points[:, 1:] - points[:, :-1]) * FPS
+    return torch.sqrt(step.pow(2).sum(-1) + 1e-8).flatten(1).mean(1)
 
 
 def horizontal_root_speed(vectors: torch.Tensor) -> torch.Tensor:

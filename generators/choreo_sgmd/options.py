@@ -164,6 +164,8 @@ class TrainOptions:
                                              "against the data's, in (m/s)^2.")
     legs_weight: float | None = option(None, "Weight of the knees, ankles and feet around the pelvis against the data's "
                                              "(positions in m^2 + speeds in (m/s)^2), by each window's signal share.")
+    legs_speed_weight: float | None = option(None, "Weight of each window's mean speed of the knees, ankles and feet "
+                                                   "around the pelvis against the data's, in (m/s)^2.")
     init_from: str | None = option(None, "Fine-tune from this training state or generation checkpoint (same network; "
                                          "its step count carries on; a generation checkpoint's optimiser starts afresh).",
                                    existing_file=True)

@@ -114,9 +114,9 @@ def test_legs_term_sees_steps_around_the_pelvis_not_the_travel_or_the_facing():
         return torch.from_numpy(motion_to_vector(motion))[None].float()
 
     def term(a, b):
-        from choreo_sgmd.losses import joint_positions
+        from choreo_sgmd.losses import joint_positions, legs_around_pelvis
 
-        return float(legs_error(a, joint_positions(a), b, joint_positions(b))[0])
+        return float(legs_error(legs_around_pelvis(a, joint_positions(a)), legs_around_pelvis(b, joint_positions(b)))[0])
 
     target = vectors(stepping, root)
     assert term(target, target) == pytest.approx(0.0, abs=1e-9)
@@ -125,8 +125,22 @@ def test_legs_term_sees_steps_around_the_pelvis_not_the_travel_or_the_facing():
     assert term(vectors(still, root), target) > 0.05  # a leg that stays put while the data's steps
 
 
+def test_legs_speed_term_asks_for_the_datas_speed_not_its_timing():
+    """A leg swinging at the data's speed but half a cycle late costs the legs term a lot and the
+    mean-speed term nothing; a leg standing still costs both (why the speed: docs/sgmd.md, "Legs")."""
+    from choreo_sgmd.losses import legs_error, mean_speed
+
+    t = torch.arange(60)[None, :, None, None] / 30.0
+    swing = lambda phase: torch.cat([0.3 * torch.sin(2 * torch.pi * t + phase), torch.zeros(1, 60, 1, 2)], -1)  # noqa: E731
+    data, late, still = swing(0.0), swing(torch.pi), torch.zeros(1, 60, 1, 3)
+    assert float(legs_error(late, data)[0]) > 1.0
+    assert float((mean_speed(late) - mean_speed(data))[0]) == pytest.approx(0.0, abs=1e-4)
+    assert float(mean_speed(data)[0]) == pytest.approx(4 * 0.3, rel=0.02)  # 4 amplitudes a second
+    assert float(mean_speed(still)[0]) < 1e-3
+
+
 @pytest.mark.parametrize("bad", [{"contact_source": "model"}, {"stepping_weight": -1.0}, {"leg_weight": 0.0},
-                                 {"legs_weight": -1.0}])
+                                 {"legs_weight": -1.0}, {"legs_speed_weight": -1.0}])
 def test_bad_foot_settings_are_refused(bad):
     with pytest.raises(ValueError):
         DiffusionConfig(**bad)
