@@ -139,6 +139,8 @@ class TrainOptions:
     style_mode: str | None = option(None, "Style conditioning: modulation (the paper's), concat or none (EDGE).")
     style_init: str | None = option(None, "The style FC's initial weights: random, or zero (starts as the no-style model).")
     style_dropout: float | None = option(None, "Share of training windows shown without their style.")
+    dropout: float | None = option(None, "The network's dropout while training (with --init-from it may differ from the "
+                                         "started-from network's: the weights are the same).")
     checkpoint_every: int | None = option(None, "Steps between checkpoints and validations.")
     seed: int | None = option(None, "Seed of initialisation, batches and noise.")
     mirror: bool | None = option(None, "Also train on mirrored dances (docs/sgmd.md).", "--mirror/--no-mirror")

@@ -199,8 +199,9 @@ class Trainer:
                      "optimizer": {"state": {}, "param_groups": self.optimizer.state_dict()["param_groups"]}}
         stored = asdict(ModelConfig(**state["model_config"]))
         adds_pace = self.model_config.pace_condition and not stored["pace_condition"]
+        free = {"dropout"} | ({"pace_condition"} if adds_pace else set())  # no weight depends on them
         changed = [f"{key} {value!r} -> {getattr(self.model_config, key)!r}" for key, value in stored.items()
-                   if getattr(self.model_config, key) != value and not (adds_pace and key == "pace_condition")]
+                   if getattr(self.model_config, key) != value and key not in free]
         if changed:
             raise SettingsDiffer(f"cannot start from {name}: its network differs ({'; '.join(changed)})")
         if adds_pace:

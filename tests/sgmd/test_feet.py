@@ -146,9 +146,19 @@ def test_bad_foot_settings_are_refused(bad):
         DiffusionConfig(**bad)
 
 
-def small_trainer(diffusion=DiffusionConfig(), latent=32):
-    config = model_config("tiny", latent_dim=latent, style_dim=8)
+def small_trainer(diffusion=DiffusionConfig(), latent=32, **model):
+    config = model_config("tiny", latent_dim=latent, style_dim=8, **model)
     return Trainer(config, diffusion, TrainConfig(batch_size=2, max_steps=10), synthetic_windows(), None)
+
+
+def test_fine_tuning_may_change_the_dropout_but_not_the_network():
+    source = small_trainer()
+    source.train_step()
+    tuned = small_trainer(dropout=0.0)
+    tuned.start_from(source.state(), "base.pt")  # the same weights: dropout has none
+    assert tuned.model_config.dropout == 0.0 and tuned.step == 1
+    with pytest.raises(Exception, match="latent_dim"):
+        small_trainer(latent=16).start_from(source.state(), "base.pt")
 
 
 def test_fine_tuning_starts_from_the_weights_and_step_under_new_losses():
