@@ -11,7 +11,7 @@ from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
 from choreo.options import forwarded
-from choreo.generator.registry import lazy_exports
+from choreo.lazy import lazy_exports
 
 from .config import CLIP_FRAMES, GraphConfig, TrainOptions
 

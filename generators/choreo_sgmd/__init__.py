@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from choreo.generator import GeneratorPlugin
-from choreo.generator.registry import lazy_exports
+from choreo.lazy import lazy_exports
 
 from choreo.options import forwarded
 

@@ -1,28 +1,27 @@
-"""Packages whose names load their module on first use.
+"""Packages whose names load their module on first use (PEP 562).
 
-Why: the command line is built from settings dataclasses that live beside the work they set
-(choreo.music.beat_options, choreo.motion.delivery_options). Importing them runs their package's
-``__init__``; if that imported every module, ``choreo --help`` and a mistyped flag would wait for
-numpy and scipy.
+Why: every CLI start imports each backend plugin's package to find it, and builds its flags from
+settings dataclasses that live beside the work they set (choreo.music.beat_options,
+choreo.motion.delivery_options). If those packages' ``__init__`` imported every module, ``choreo
+--help`` and a mistyped flag would wait for numpy, scipy and torch.
 """
 
 from __future__ import annotations
 
-import importlib
-from typing import Any, Callable
+from importlib import import_module
 
 
-def lazy_exports(package: str, homes: dict[str, tuple[str, ...]]) -> tuple[Callable[[str], Any], list[str]]:
-    """The ``__getattr__`` and ``__all__`` of ``package``, whose names are ``homes``' (submodule ->
-    the names it defines): each imported from its submodule when first asked for."""
-    home_of = {name: module for module, names in homes.items() for name in names}
+def lazy_exports(package: str, exports: dict[str, str], namespace: dict):
+    """``(__getattr__, __dir__)`` for ``package``, whose exports (``name -> .submodule``) are
+    imported from their submodule when first asked for and then kept in ``namespace``."""
 
-    def __getattr__(name: str) -> Any:
-        if name not in home_of:
+    def __getattr__(name: str):
+        if name not in exports:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        module = importlib.import_module(f"{package}.{home_of[name]}")
-        value = getattr(module, name)
-        setattr(importlib.import_module(package), name, value)  # asked once
-        return value
+        namespace[name] = getattr(import_module(exports[name], package), name)
+        return namespace[name]
 
-    return __getattr__, sorted(home_of)
+    def __dir__():
+        return sorted(set(namespace) | set(exports))
+
+    return __getattr__, __dir__

@@ -72,7 +72,7 @@ class DanceFlags:
     def request(self, constrained: bool = False, loop: bool = False, **factory_options) -> "DanceRequest":
         """The checked request (before any song is read): an unknown backend, a flag it does not
         take, a value it refuses, unreadable --beats, constraints it cannot keep."""
-        from ..pipeline import Backend, DanceRequest
+        from ..pipeline import Backend
 
         backend = Backend(self.generator, self.checkpoint, **factory_options)
         return DanceRequest(backend=backend, **self.asked, options=self.options, finishing=self.finishing,

@@ -31,22 +31,3 @@ def available_plugins() -> dict[str, GeneratorPlugin]:
             except ImportError:
                 pass
     return dict(sorted(plugins.items()))
-
-
-def lazy_exports(package: str, exports: dict[str, str], namespace: dict):
-    """``(__getattr__, __dir__)`` for a backend package (PEP 562) whose heavier exports, ``name ->
-    submodule``, load on first use: every CLI start imports each plugin's package to find it, and
-    that must not import torch."""
-
-    def __getattr__(name: str):
-        if name not in exports:
-            raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        from importlib import import_module
-
-        namespace[name] = getattr(import_module(exports[name], package), name)
-        return namespace[name]
-
-    def __dir__():
-        return sorted(set(namespace) | set(exports))
-
-    return __getattr__, __dir__
