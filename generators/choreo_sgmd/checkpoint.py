@@ -80,6 +80,8 @@ def inference_state(state: dict, half: bool = False) -> dict:
     if missing:
         raise InputError(f"checkpoint lacks {', '.join(missing)}")
     inference = {key: state[key] for key in INFERENCE_KEYS}
+    if "started_from" in state:  # a fine-tune names its starting point: the recipe is two runs
+        inference["started_from"] = state["started_from"]
     if half:
         inference["ema_state_dict"] = {name: weight.half() if weight.is_floating_point() else weight
                                        for name, weight in inference["ema_state_dict"].items()}

@@ -632,24 +632,29 @@ def run(seconds: float | None, cases: int | None, seed: int, findings: Path,
         if verbose:
             for note in notes:
                 print(note)
-        start = time.monotonic()
-        counts = Counter()
-        turn = 0
-        while True:
-            active = [s for s in surfaces if cases is None or counts[s] < cases]
-            if not active or (seconds is not None and time.monotonic() - start > seconds):
-                break
-            surface = active[turn % len(active)]
-            turn += 1
-            case = {"interrupt": lambda: interrupt_case(rng, inputs, commands), "target": lambda: target_case(rng, inputs),
-                    "options": lambda: option_case(rng, inputs)}[surface]()
-            counts[surface] += 1
+        makers = {"interrupt": lambda: interrupt_case(rng, inputs, commands), "target": lambda: target_case(rng, inputs),
+                  "options": lambda: option_case(rng, inputs)}
+        for case in in_turn(surfaces, makers, cases, seconds):
             done.append(case)
             if case.verdict == "FINDING":
                 path = save_finding(findings, len(done), case)
                 if verbose:
                     print(f"FINDING {case.surface} {case.name}: {case.detail[:200]}\n    {path}", flush=True)
     return done
+
+
+def in_turn(surfaces, makers: dict, cases: int | None, seconds: float | None):
+    """One case of each surface in turn (``makers[surface]()``), until each has ``cases`` or
+    ``seconds`` have passed."""
+    start, counts, turn = time.monotonic(), Counter(), 0
+    while True:
+        active = [s for s in surfaces if cases is None or counts[s] < cases]
+        if not active or (seconds is not None and time.monotonic() - start > seconds):
+            return
+        surface = active[turn % len(active)]
+        turn += 1
+        counts[surface] += 1
+        yield makers[surface]()
 
 
 def print_report(done: list[Case], elapsed: float, findings: Path) -> None:
@@ -665,23 +670,28 @@ def print_report(done: list[Case], elapsed: float, findings: Path) -> None:
     print(f"{len(done)} cases in {elapsed:.0f} s; {bad} findings" + (f", saved under {findings}" if bad else ""))
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def surface_main(argv: list[str] | None, doc: str, surfaces: tuple[str, ...], findings: Path, run, report) -> int:
+    """The command line of a surface fuzzer (this one and tests/fuzz/surfaces.py): exit 1 on a finding."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=None, help="stop after this long (60 s without --cases)")
     parser.add_argument("--cases", type=int, default=None, help="stop after this many cases of each surface")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--surfaces", default=",".join(SURFACES), help="comma list of interrupt, target, options")
-    parser.add_argument("--findings", type=Path, default=DEFAULT_FINDINGS)
+    parser.add_argument("--surfaces", default=",".join(surfaces), help="comma list of " + ", ".join(surfaces))
+    parser.add_argument("--findings", type=Path, default=findings)
     args = parser.parse_args(argv)
     seconds = 60.0 if args.seconds is None and args.cases is None else args.seconds
-    surfaces = tuple(s for s in args.surfaces.split(",") if s)
-    unknown = set(surfaces) - set(SURFACES)
+    chosen = tuple(s for s in args.surfaces.split(",") if s)
+    unknown = set(chosen) - set(surfaces)
     if unknown:
         parser.error(f"unknown surfaces: {', '.join(sorted(unknown))}")
     start = time.monotonic()
-    done = run(seconds, args.cases, args.seed, args.findings, surfaces)
-    print_report(done, time.monotonic() - start, args.findings)
+    done = run(seconds, args.cases, args.seed, args.findings, chosen)
+    report(done, time.monotonic() - start, args.findings)
     return 1 if any(c.verdict == "FINDING" for c in done) else 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    return surface_main(argv, __doc__, SURFACES, DEFAULT_FINDINGS, run, print_report)
 
 
 if __name__ == "__main__":

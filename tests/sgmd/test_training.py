@@ -90,24 +90,45 @@ def test_every_training_flag_reaches_the_checkpoint(tmp_path):
     assert generated.returncode == 0, generated.stderr
 
 
-def test_training_defaults_are_the_bundled_models_recipe():
-    """`choreo train sgmd` with no flags trains what the bundled model was trained with (docs/sgmd.md),
-    read from the bundled checkpoint itself: every setting but the run's length and logging."""
-    from choreo_sgmd import DEFAULT_CHECKPOINT
+BASE_CHECKPOINT = Path(__file__).resolve().parents[2] / "generators/choreo_sgmd/weights/sgmd-cpu-m2d-base.pt"
+
+
+def test_training_defaults_are_the_bundled_models_base_recipe():
+    """`choreo train sgmd` with no flags trains the run the bundled model was fine-tuned from
+    (docs/sgmd.md, "The bundled model"), read from that run's checkpoint itself: every setting but
+    the run's length and logging."""
     from choreo_sgmd.config import DiffusionConfig, ModelConfig, TrainConfig, model_config, to_dict
     from choreo_sgmd.style import style_dim
 
-    bundled = load_checkpoint(DEFAULT_CHECKPOINT)
+    base = load_checkpoint(BASE_CHECKPOINT)
     # settings added since (the pace condition) default to what it was trained with
-    assert to_dict(model_config("cpu", style_dim=style_dim("description"))) == to_dict(ModelConfig(**bundled["model_config"]))
-    assert set(bundled["model_config"]) <= set(to_dict(ModelConfig()))
-    # settings added since (contact source, stepping, leg weight) default to what it was trained with
-    assert to_dict(DiffusionConfig()) == to_dict(DiffusionConfig(**bundled["diffusion_config"]))
-    assert set(bundled["diffusion_config"]) <= set(to_dict(DiffusionConfig()))
+    assert to_dict(model_config("cpu", style_dim=style_dim("description"))) == to_dict(ModelConfig(**base["model_config"]))
+    assert set(base["model_config"]) <= set(to_dict(ModelConfig()))
+    # settings added since (contact source, stepping, leg weights) default to what it was trained with
+    assert to_dict(DiffusionConfig()) == to_dict(DiffusionConfig(**base["diffusion_config"]))
+    assert set(base["diffusion_config"]) <= set(to_dict(DiffusionConfig()))
     free = {"max_steps", "validation_every", "checkpoint_every"}
     defaults = {k: v for k, v in to_dict(TrainConfig()).items() if k not in free}
-    assert defaults == {k: v for k, v in to_dict(TrainConfig(**bundled["train_config"])).items() if k not in free}
-    assert set(bundled["train_config"]) <= set(to_dict(TrainConfig()))
+    assert defaults == {k: v for k, v in to_dict(TrainConfig(**base["train_config"])).items() if k not in free}
+    assert set(base["train_config"]) <= set(to_dict(TrainConfig()))
+
+
+def test_the_bundled_model_is_its_base_fine_tuned_without_dropout_and_with_the_legs_speed():
+    """The bundled model differs from its base run in exactly `--dropout 0 --legs-speed-weight 1`,
+    and names the base file and step it started from: the recipe is the two documented commands."""
+    from choreo_sgmd import DEFAULT_CHECKPOINT
+    from choreo_sgmd.config import DiffusionConfig, ModelConfig, TrainConfig, to_dict
+
+    base, bundled = load_checkpoint(BASE_CHECKPOINT), load_checkpoint(DEFAULT_CHECKPOINT)
+    assert bundled["started_from"] == {"checkpoint": BASE_CHECKPOINT.name, "step": base["step"]}
+    # settings added after the base was trained take their defaults, which are what it was trained with
+    assert to_dict(ModelConfig(**bundled["model_config"])) == to_dict(ModelConfig(**{**base["model_config"], "dropout": 0.0}))
+    assert to_dict(DiffusionConfig(**bundled["diffusion_config"])) == \
+        to_dict(DiffusionConfig(**{**base["diffusion_config"], "legs_speed_weight": 1.0}))
+    free = {"max_steps", "validation_every", "checkpoint_every", "num_threads"}
+    assert {k: v for k, v in to_dict(TrainConfig(**bundled["train_config"])).items() if k not in free} == \
+        {k: v for k, v in to_dict(TrainConfig(**base["train_config"])).items() if k not in free}
+    assert bundled["step"] > base["step"]
 
 
 def test_holding_out_validation_needs_m2d_and_leaves_its_clips_out():
@@ -144,3 +165,5 @@ def test_a_generation_checkpoint_is_fine_tuned_from_its_ema_weights(tmp_path):
     start = load_checkpoint(tmp_path / "bundled.pt")["ema_state_dict"]
     moved = max(float((state["state_dict"][key] - start[key].float()).abs().max()) for key in start)
     assert 0 < moved < 0.05  # two steps of AdamW from the bundled weights, not from a fresh network
+    exported = export_for_inference(tmp_path / "tuned" / "last.pt", tmp_path / "tuned.pt", half=True)
+    assert exported["started_from"] == {"checkpoint": "bundled.pt", "step": 10}  # the recipe's first run, named

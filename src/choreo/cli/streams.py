@@ -4,8 +4,8 @@ A closed descriptor's number goes to the next file the process opens: with stder
 song's audio file became descriptor 2, and progress written to "stderr" landed in it (decoding
 then failed). So each closed one of 0, 1 and 2 is opened on /dev/null first. Output lost this
 way is the user's to know: writing to a stdout that was closed or that fails (a full disk, a
-closed pipe) is an :class:`~choreo.errors.OutputError` (exit 3, one line); a closed stderr just
-takes the messages away.
+closed pipe) is an :class:`~choreo.errors.OutputError` (exit 3, one line); a closed or full
+stderr just takes the messages away.
 """
 
 from __future__ import annotations
@@ -54,6 +54,30 @@ class GuardedOutput:
             raise OutputError(f"cannot write to standard output: {error.strerror or type(error).__name__}") from None
 
 
+class ForgivingErrors:
+    """sys.stderr that a full or failing stream cannot fail: messages then go nowhere, as with a
+    closed stderr, and the command keeps its own exit code."""
+
+    def __init__(self, stream):
+        self.stream = stream
+
+    def write(self, data) -> int:
+        try:
+            return self.stream.write(data)
+        except OSError:
+            _silence(2)
+            return len(data)
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except OSError:
+            _silence(2)
+
+    def __getattr__(self, name):  # encoding, fileno, isatty, ...: the stream's own
+        return getattr(self.stream, name)
+
+
 @contextlib.contextmanager
 def standard_streams() -> Iterator[None]:
     """For the block: closed descriptors 0-2 opened on /dev/null, so no file choreo opens takes
@@ -68,6 +92,7 @@ def standard_streams() -> Iterator[None]:
     sys.stdout = GuardedOutput(None if 1 in closed or sys.stdout is None else sys.stdout)
     if 2 in closed or sys.stderr is None:
         sys.stderr = open(2, "w", closefd=False, errors="backslashreplace")
+    sys.stderr = ForgivingErrors(sys.stderr)
     try:
         yield
     finally:
@@ -75,8 +100,13 @@ def standard_streams() -> Iterator[None]:
 
 
 def _silence_stdout() -> None:
+    _silence(1)
+
+
+def _silence(fd: int) -> None:
+    """Point ``fd`` at /dev/null: what is still buffered for it goes nowhere instead of failing again."""
     null = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(null, 1)
+    os.dup2(null, fd)
     os.close(null)
 
 
