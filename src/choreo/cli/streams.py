@@ -88,7 +88,9 @@ def standard_streams() -> Iterator[None]:
         if null != fd:
             os.dup2(null, fd)
             os.close(null)
-    before = sys.stdout, sys.stderr
+    before = sys.stdin, sys.stdout, sys.stderr
+    if 0 in closed or sys.stdin is None:  # Python leaves a closed stdin None: read it as the empty /dev/null
+        sys.stdin = open(0, closefd=False)
     sys.stdout = GuardedOutput(None if 1 in closed or sys.stdout is None else sys.stdout)
     if 2 in closed or sys.stderr is None:
         sys.stderr = open(2, "w", closefd=False, errors="backslashreplace")
@@ -96,7 +98,7 @@ def standard_streams() -> Iterator[None]:
     try:
         yield
     finally:
-        sys.stdout, sys.stderr = before
+        sys.stdin, sys.stdout, sys.stderr = before
 
 
 def _silence_stdout() -> None:

@@ -103,8 +103,6 @@ def piped_motion_file(format: str | None = None, stream=None) -> Iterator[Path]:
     """Motion bytes from stdin (``-``), saved to a temporary file named for their format so every
     reader can take them as it takes a file; removed on exit. The format comes from ``format`` or
     from the bytes' own signature (zip, .npy, glTF, pickle, BVH, JSON)."""
-    if stream is None and sys.stdin is None:  # started with stdin closed: Python leaves it None
-        raise MotionFormatError("no motion on stdin (standard input is closed)")
     stream = sys.stdin.buffer if stream is None else stream
     data = stream.read(MAX_PIPED_BYTES + 1)
     if len(data) > MAX_PIPED_BYTES:
