@@ -34,6 +34,7 @@ import numpy as np
 import choreo
 import choreo.finishing
 from choreo.datasets import TRAIN, load_dataset, select_split
+from choreo.form.options import FormOptions
 from choreo.finishing import AccentConfig, Finishing, FootstepsConfig, PaceConfig, RootPathConfig
 from choreo.metrics.fid import motion_features
 from choreo.metrics.protocol import scoring_windows
@@ -109,6 +110,8 @@ def main() -> None:
                         help="finishing passes' settings PASS.FIELD=JSON: footsteps.strength=0.8, pace.tolerance=0, "
                              "root_path.cutoff_hz=4")
     parser.add_argument("--songs", nargs="*", default=None, help="only these clips")
+    parser.add_argument("--form", default=None, help="--form (auto: the analysed form; default: off)")
+    parser.add_argument("--returns", type=float, default=FormOptions.returns, help="--returns, with --form")
     parser.add_argument("--outside", nargs="*", default=[], help="also these songs from outside M2D, danced whole "
                                                                     "with each of --outside-styles (no real dancer)")
     parser.add_argument("--outside-styles", nargs="*", default=["cha-cha", "rumba", "waltz", "none"])
@@ -133,15 +136,16 @@ def main() -> None:
     for clip in songs:
         music = song_of(clip)
         truth = clip.motion.joint_positions()[: len(music.features)]
-        real[clip.name] = figures(truth, music)
+        real[clip.name] = figures(truth, music, clip.genre)
         real_dances.append(truth)
         real_genres.append(clip.genre)
         rows = []
         for seed in args.seeds:
             motion = choreo.dance(music, backend, style=None if args.no_style else clip.genre, seed=seed,
-                                  options=options, finishing=finishing)
+                                  options=options, finishing=finishing, form=args.form,
+                                  returns=args.returns)
             positions = motion.joint_positions()
-            rows.append({**figures(positions, music), "model_pace": motion.metadata.get("pace", {}).get("model")})
+            rows.append({**figures(positions, music, clip.genre), "model_pace": motion.metadata.get("pace", {}).get("model")})
             dances.append(positions)
             genres.append(clip.genre)
             groups.append(f"{clip.name} seed {seed}")
@@ -176,9 +180,10 @@ def dance_outside(song: str, backend, args, options: dict, finishing: Finishing)
     rows = {}
     for style in args.outside_styles:
         genre = None if style == "none" else style
-        danced = [choreo.dance(music, backend, style=genre, seed=seed, options=options, finishing=finishing)
+        danced = [choreo.dance(music, backend, style=genre, seed=seed, options=options, finishing=finishing,
+                               form=args.form, returns=args.returns)
                   for seed in args.seeds]
-        seeds = [{**figures(m.joint_positions(), music), "model_pace": m.metadata.get("pace", {}).get("model")}
+        seeds = [{**figures(m.joint_positions(), music, genre), "model_pace": m.metadata.get("pace", {}).get("model")}
                  for m in danced]
         mean = mean_rows(seeds)
         model_pace = np.mean([r["model_pace"] for r in seeds]) if all(r["model_pace"] for r in seeds) else float("nan")

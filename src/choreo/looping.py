@@ -29,11 +29,11 @@ from .motion.filters import low_pass
 from .motion.seam import CLOSING_SECONDS, bent_into, closed
 from .motion.stitch import facing_yaw, rotate_about_y, turned_and_moved
 from .motion.travel import TRACK_CUTOFF_HZ, ground_track
+from .music.form import beats_per_bar
 
 RETURN_SECONDS = 0.25  # the opening given again after the end: a pose and its motion, a few model frames
 AFTER_SECONDS = 1.0  # the opening's music danced past the loop's end: 4 s made SGMD's return slide more (docs/results.md)
 LEAD_IN_SECONDS = 4.0  # the loop's end danced before its opening, as it will be in a loop: the opening is mid-dance
-BEATS_PER_BAR, WALTZ_BEATS_PER_BAR = 4, 3
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ class Loop:
     @classmethod
     def of(cls, music, style: str | None) -> "Loop":
         """The longest whole number of bars the song holds, measured on its beats from the start."""
-        per_bar = WALTZ_BEATS_PER_BAR if style and "waltz" in style.lower() else BEATS_PER_BAR
+        per_bar = beats_per_bar(style)
         beats = heard = np.asarray(music.beat_times, dtype=np.float64)
         if len(beats) > 1:  # beats the tracker did not hear before the song's end, at the tempo's own spacing
             spacing = float(np.median(np.diff(beats)))

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping, Union
 
 from .errors import ParameterError
 from .finishing import Finishing  # re-exported: choreo.pipeline.Finishing stays importable
+from .form.options import FormOptions
 from .generator.base import MAX_SEED, check_seed
 from .options import option
 
@@ -115,6 +116,7 @@ class DanceRequest:
                                        "at any count.", "--threads", bounds=(1, math.inf))
     constrained: bool = False  # whether constraints will come (keys, seed motion, inpainting, a path)
     loop: bool = False  # a dance that loops: whole bars, led back into its opening (choreo.looping)
+    form: FormOptions = FormOptions()  # the song's form and how its returns are danced (choreo.form)
 
     def __post_init__(self):
         check_seed(self.seed)
@@ -139,7 +141,7 @@ class DanceRequest:
         from .music import BeatSource, Music
 
         return Music.from_file(song, progress=progress, log_mel=self.backend.listens_to_spectrum,
-                               timbre=self.backend.reads_timbre, beats=self.beats or BeatSource())
+                               timbre=self.backend.reads_timbre or self.form.analysed, beats=self.beats or BeatSource())
 
     def dance(self, song: Union[str, os.PathLike, "Music"], constraints: Union["Constraints", ConstraintsFor, None] = None,
               analysis_progress: Callable[[float, float], None] | None = None,
@@ -154,17 +156,52 @@ class DanceRequest:
         music = song if isinstance(song, Music) else self.analyse(song, analysis_progress)
         backend = self.backend.loaded()
         fixed = constraints(music) if callable(constraints) else constraints
+        form = self.form.of(music, self.style)
         use_threads(self.threads)  # chosen now, beside whatever else runs now
         if self.loop:
-            finished = self.looped(backend, music, progress)
+            finished = self.looped(backend, music, form, progress)
         else:  # The backend's dance goes straight into finish, which lets go of it after the first pass:
             # an hour's raw dance kept here beside the finished one would add to the peak memory.
             finished = finish(backend.generate(self.generation(music, fixed), progress=progress), music.beat_frames,
                               self.finishing, fixed, audible=music.audible)
+            finished = self.returned(finished, music, form, fixed)
         finished.metadata = {**finished.metadata, "beats": music.beat_source, "tempo": round(float(music.tempo), 3)}
+        if form is not None:
+            finished.metadata["form"] = form.as_json()
         return finished
 
-    def looped(self, backend: "Generator", music: "Music", progress: Callable[[float], None] | None = None) -> "Motion":
+    def returned(self, danced: "Motion", music: "Music", form, fixed: "Constraints | None" = None,
+                 looped: bool = False) -> "Motion":
+        """``danced`` with the song's returning sections danced as their first occurrence
+        (choreo.form.returns), as exactly as --returns asks. What the user fixed stays; so does a
+        loop's seam (no return reaches its ends, and none moves its travel)."""
+        if form is None or not self.form.active:
+            return danced
+        import numpy as np
+
+        from .constraints import parse_style_schedule
+        from .form.returns import plan_returns, with_returns
+
+        schedule = parse_style_schedule(self.style, music.duration) if self.style else None
+        kept = None if fixed is None else fixed.fixed_frames()
+        if looped:
+            kept = np.zeros(danced.num_frames, bool)
+            kept[[0, -1]] = True
+        plan = plan_returns(form, music.beat_times, danced.fps, danced.num_frames, mirror=self.form.mirror_returns,
+                            fixed=kept, schedule=schedule)
+        keep_path = looped or (fixed is not None and bool(fixed.root_known.any()))
+        returned = with_returns(danced, plan, self.form.returns, keep_path=keep_path)
+        if not (plan and self.finishing.footsteps and self.form.returns > 0):
+            return returned
+        from .finishing import footsteps
+        from .form.returns import away_from_joins
+
+        kept = away_from_joins(plan, danced.num_frames, danced.fps) | (False if kept is None else kept)
+        config = self.finishing.configs.get("footsteps")  # the feet a join's bend made slide, planted again
+        return footsteps(returned, kept, **({} if config is None else {"config": config}))
+
+    def looped(self, backend: "Generator", music: "Music", form=None,
+               progress: Callable[[float], None] | None = None) -> "Motion":
         """A dance that loops (choreo.looping): danced once, then again led back into its own
         opening, finished as an endless loop plays it, and cut to its whole bars."""
         from .finishing import finish
@@ -177,8 +214,9 @@ class DanceRequest:
         second = backend.generate(self.generation(danced, loop.constraints(first, cycle)),
                                   progress=progress and (lambda done: progress(0.5 + done / 2)))
         around = loop.periodic(second, cycle)
-        return loop.cut(finish(around, loop.music(music).beat_frames, self.finishing,
-                               anchors=loop.anchors(around.num_frames)))
+        looped = loop.cut(finish(around, loop.music(music).beat_frames, self.finishing,
+                                 anchors=loop.anchors(around.num_frames)))
+        return self.returned(looped, music, form, looped=True)
 
     def generation(self, music: "Music", constraints: "Constraints | None" = None):
         """What the backend is asked for one dance to ``music``."""
@@ -223,6 +261,9 @@ def dance(
     threads: int | None = None,
     beat_tracker: str = "choreo",
     loop: bool = False,
+    form: str | None = None,
+    returns: float = FormOptions.returns,
+    mirror_returns: bool = False,
 ) -> "Motion":
     """Dance to ``song`` (an audio file or an analysed :class:`Music`) with one backend.
 
@@ -233,6 +274,9 @@ def dance(
     replace the tracked beats everywhere: features, beat lock, backend; ``beat_tracker="madmom"``
     has madmom's trained tracker hear them (the madmom extra; its models are CC BY-NC-SA 4.0,
     non-commercial). ``loop``: a dance of whole bars that ends where it began (choreo.looping).
+    ``form`` ("0:00=A,0:16=B,0:32=A", or "auto": analysed; default None: every section danced
+    afresh), ``returns`` (0: returning sections danced afresh, 1: their first occurrence's phrase)
+    and ``mirror_returns``: choreo.form.
     The rest: :class:`DanceRequest` and its ``dance``.
     """
     from .music import BeatOptions, Music
@@ -246,5 +290,6 @@ def dance(
         raise ParameterError("the music is already analysed: give its beats to Music.from_file instead")
     request = DanceRequest(backend=backend, style=style, seed=seed, options=dict(options or {}), finishing=finishing,
                            beats=beat_options.source() if beat_options.given else None,
-                           threads=threads, constrained=constraints is not None, loop=loop)
+                           threads=threads, constrained=constraints is not None, loop=loop,
+                           form=FormOptions(form=form, returns=returns, mirror_returns=mirror_returns))
     return request.dance(song, constraints, analysis_progress, progress)

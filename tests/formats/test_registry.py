@@ -50,8 +50,6 @@ def test_round_trip_below_a_tenth_of_a_millimetre(tmp_path, extension, fps):
     path = tmp_path / f"dance{extension}"
     write_motion(motion, path)
     back = read_motion(path, format="pkl") if extension == ".pkl" else read_motion(path)
-    if extension == ".pkl":  # AIST++ pickles carry no fps: they are 60 fps by definition
-        back = back.replace(fps=fps)
     assert back.num_frames == motion.num_frames and back.fps == fps
     assert max_joint_error(back, motion) < TOLERANCE
 
@@ -309,7 +307,7 @@ def test_a_bad_shape_names_the_file(tmp_path):
 @pytest.mark.survivor
 def test_written_pickle_is_what_aistpp_tools_read(tmp_path):
     path = tmp_path / "out.pkl"
-    write_motion(dance(), path)
+    write_motion(dance().replace(fps=60.0), path)
     raw = path.read_bytes()
     assert raw[:2] == b"\x80\x04"  # protocol 4: Python 3.4+, as AIST++'s own files
     arrays = pickle.loads(raw)
@@ -317,6 +315,8 @@ def test_written_pickle_is_what_aistpp_tools_read(tmp_path):
     assert arrays["smpl_loss"] == 0.0 and isinstance(arrays["smpl_loss"], float)
     assert all(arrays[k].dtype == np.float64 for k in ("smpl_poses", "smpl_trans", "smpl_scaling"))
     assert arrays["smpl_poses"].shape == (6, 72) and arrays["smpl_scaling"].tolist() == [1.0]
+    write_motion(dance().replace(fps=30.0), path)  # another rate: one more key, which AIST++'s tools ignore
+    assert pickle.loads(path.read_bytes())["fps"] == 30.0 and read_motion(path).fps == 30.0
 
 
 def smpl_dict(frames: int = 4) -> dict:
@@ -558,3 +558,11 @@ def test_a_failing_companion_output_leaves_no_motion(tmp_path):
     written = write_motions(hostile_dance(), [str(tmp_path / "a.bvh")],
                             companions={str(tmp_path / "a.mp4"): lambda temporary: temporary.write_bytes(b"v")})
     assert written == [str(tmp_path / "a.bvh")] and (tmp_path / "a.mp4").read_bytes() == b"v"
+
+
+@pytest.mark.parametrize("fps", [1e9, "60", float("nan")])
+def test_a_pickles_rate_outside_choreos_range_is_refused(tmp_path, fps):
+    path = tmp_path / "odd.pkl"
+    path.write_bytes(pickle.dumps({**smpl_dict(), "fps": fps}, protocol=4))
+    with pytest.raises(MotionFormatError, match="its fps must be a number from 10 to 240"):
+        read_motion(path)

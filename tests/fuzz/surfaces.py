@@ -107,9 +107,7 @@ KNOWN = {  # surface: {kind: pattern every problem of a case matches}; found by 
         "second signal after the unwinding": r"killed by SIG(INT|TERM) after the unwinding",  # handlers put back
         "temporary left": r"temporaries left: \[(\('\.B\.[^']*', \d+\)(, )?)+\]$",  # a signal right after mkstemp
     },
-    "writers": {
-        "pkl at 60 fps": r"^(std)?out\.pkl reads back at 60 fps, written at 240$",  # AIST++ pkl holds no rate
-    },
+    "writers": {},
 }
 
 

@@ -178,7 +178,6 @@ def test_a_signal_while_outputs_are_moved_into_place_leaves_none(fuzz, case, mon
     assert not [p for p in paths if (case / p).exists()]
 
 
-@pytest.mark.xfail(strict=True, reason="issue 59 fuzzing: AIST++ pkl holds no rate and reads as 60 fps")
 def test_a_pkl_written_at_240_fps_reads_back_at_240(fuzz, case):
     assert fuzz.forked(["convert", "d.npz", "out.pkl", "--fps", "240"], case).returncode == 0
     assert fuzz.read_back(case / "out.pkl", 240.0, None) == ""

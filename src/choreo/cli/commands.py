@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from ..motion.delivery_options import Delivery
+from ..form.options import FormOptions
 from ..music.beat_options import BeatOptions
 from .flags import flag_parameters, given_values, with_parameters
 from .progress import progress_bar, stderr_console, stdout_console
@@ -30,64 +31,98 @@ def _require_file(path: Path) -> Path:
 
 def info(
     path: Path = typer.Argument(..., help="A motion file (bvh, npz, pkl, npy, json, glb; - reads stdin) or an audio file."),
+    json_output: bool = typer.Option(False, "--json", help="Print the facts as one JSON object on stdout."),
     **flags,
 ) -> None:
-    """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats).
+    """Describe a motion file (duration, fps, joints) or a song (duration, tempo, beats, form).
 
     A song's beats are the ones the dancing commands would use with the same --bpm, --beats or
-    --beat-tracker.
+    --beat-tracker; its form (sections as letters, a letter that comes back is a return) the one
+    they would dance to, or the one --form gives.
 
     Examples:
       choreo info dance.bvh
       choreo info examples/drum_and_bass_174bpm.wav
       choreo info song.mp3 --bpm 128                      # the beats choreo generate --bpm 128 dances to
       choreo info song.mp3 --beat-tracker madmom          # madmom's beats (the madmom extra; non-commercial)
+      choreo info song.mp3 --json                         # sections with their times, for a script
       choreo generate song.mp3 -o - -f npz | choreo info -
     """
     _require_file(path)
     from ..errors import ParameterError
+    from ..form.options import FormOptions
 
     is_song = path.suffix.lower() in AUDIO_EXTENSIONS
     beat_options = BeatOptions(**given_values(BeatOptions, flags))
-    if not is_song and beat_options.given:
-        raise ParameterError("--bpm, --beats and --beat-tracker describe a song, not a motion file")
-    if is_song:
-        source = beat_options.source()
+    form_options = FormOptions(form=flags.pop("form", None))
+    if not is_song and (beat_options.given or form_options.given):
+        raise ParameterError("--bpm, --beats, --beat-tracker and --form describe a song, not a motion file")
+    facts = song_facts(path, beat_options, form_options) if is_song else motion_facts(path)
+    if json_output:
+        import json
+
+        from ..fileio import json_safe
+
+        print(json.dumps(json_safe({key: value for key, (value, _) in facts.items()}), indent=1))
+        return
     from rich.table import Table
 
     table = Table(show_header=False, box=None)
-    table.add_row("file", markup(path))
-    if is_song:
-        from ..music import Music
-
-        with progress_bar(f"analysing {path.name}") as update:
-            music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)), timbre=False,
-                                    beats=source)
-        table.add_row("kind", "audio")
-        table.add_row("duration", f"{music.duration:.2f} s")
-        table.add_row("tempo", f"{music.tempo:.1f} bpm")
-        table.add_row("beats", markup(f"{len(music.beat_times)} ({music.beat_source})"))
-        table.add_row("beat times", _first_times(music.beat_times))
-        first, stop = music.audible
-        table.add_row("music", f"{first / music.fps:.2f}-{stop / music.fps:.2f} s (quieter around it: 40 dB under its "
-                               "loud parts)")
-        table.add_row("feature frames", f"{music.num_frames} at {music.fps:g} fps")
-    else:
-        from ..formats import read_motion
-
-        motion = read_motion(path)
-        positions = motion.joint_positions()
-        table.add_row("kind", "motion")
-        table.add_row("frames", str(motion.num_frames))
-        table.add_row("fps", f"{motion.fps:g}")
-        table.add_row("duration", f"{motion.duration:.2f} s")
-        table.add_row("joints", markup(f"{motion.num_joints} ({', '.join(motion.skeleton.names[:4])}, ...)"))
-        extent = positions.max(axis=(0, 1)) - positions.min(axis=(0, 1))
-        table.add_row("extent", f"x {extent[0]:.2f} m, y {extent[1]:.2f} m, z {extent[2]:.2f} m")
+    for key, (_, shown) in facts.items():
+        table.add_row(key, markup(shown))
     stdout_console.print(table)
 
 
-with_parameters(info, flag_parameters(BeatOptions, given_only=False))
+def song_facts(path: Path, beat_options: BeatOptions, form_options) -> dict:
+    """A song's facts: name -> (value for --json, text for the table)."""
+    from ..music import Music
+    from ..music.form import analyse_form
+
+    source = beat_options.source()
+    with progress_bar(f"analysing {path.name}") as update:
+        music = Music.from_file(path, progress=lambda done, total: update(round(done), round(total)),
+                                timbre=not form_options.given, beats=source)
+    first, stop = music.audible
+    form = form_options.of(music) if form_options.given else analyse_form(music)
+    return {
+        "file": (str(path), str(path)),
+        "kind": ("audio", "audio"),
+        "duration": (round(music.duration, 3), f"{music.duration:.2f} s"),
+        "tempo": (round(music.tempo, 2), f"{music.tempo:.1f} bpm"),
+        "beats": (len(music.beat_times), f"{len(music.beat_times)} ({music.beat_source})"),
+        "beat times": ([round(float(t), 3) for t in music.beat_times], _first_times(music.beat_times)),
+        "music": ([round(first / music.fps, 3), round(stop / music.fps, 3)],
+                  f"{first / music.fps:.2f}-{stop / music.fps:.2f} s (quieter around it: 40 dB under its loud parts)"),
+        "form": (form.as_json(), f"{form.describe()} ({form.source})"),
+        "feature frames": (music.num_frames, f"{music.num_frames} at {music.fps:g} fps"),
+    }
+
+
+def motion_facts(path: Path) -> dict:
+    """A motion file's facts: name -> (value for --json, text for the table)."""
+    from ..formats import read_motion
+
+    motion = read_motion(path)
+    positions = motion.joint_positions()
+    extent = positions.max(axis=(0, 1)) - positions.min(axis=(0, 1))
+    facts = {
+        "file": (str(path), str(path)),
+        "kind": ("motion", "motion"),
+        "frames": (motion.num_frames, str(motion.num_frames)),
+        "fps": (motion.fps, f"{motion.fps:g}"),
+        "duration": (round(motion.duration, 3), f"{motion.duration:.2f} s"),
+        "joints": (list(motion.skeleton.names), f"{motion.num_joints} ({', '.join(motion.skeleton.names[:4])}, ...)"),
+        "extent": ([round(float(e), 3) for e in extent], f"x {extent[0]:.2f} m, y {extent[1]:.2f} m, z {extent[2]:.2f} m"),
+    }
+    form = motion.metadata.get("form")
+    if form:
+        from ..music.form import clock
+
+        facts["form"] = (form, ", ".join(f"{section['label']} {clock(section['start'])}" for section in form))
+    return facts
+
+
+with_parameters(info, flag_parameters(BeatOptions, given_only=False) + flag_parameters(FormOptions, given_only=False)[:1])
 
 
 def _first_times(times, shown: int = 8) -> str:

@@ -14,6 +14,7 @@ from typing import Any, Callable, Optional
 import typer
 
 from ..finishing import Finishing
+from ..form.options import FormOptions
 from ..motion.delivery_options import Delivery
 from ..music.beat_options import BeatOptions
 from ..pipeline import DanceRequest
@@ -48,6 +49,7 @@ class DanceFlags:
     format: str | None
     asked: dict[str, Any]  # DanceRequest's own flags given (style, seed, threads)
     beats: BeatOptions
+    form: FormOptions
     delivery: Delivery
     finishing: Finishing
     options: dict[str, Any]  # the backend option flags given; the rest: the backend's defaults
@@ -76,7 +78,7 @@ class DanceFlags:
 
         backend = Backend(self.generator, self.checkpoint, **factory_options)
         return DanceRequest(backend=backend, **self.asked, options=self.options, finishing=self.finishing,
-                            beats=self.beats.source(), constrained=constrained, loop=loop)
+                            beats=self.beats.source(), constrained=constrained, loop=loop, form=self.form)
 
 
 def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
@@ -91,6 +93,7 @@ def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
     extra = flag_parameters(DanceRequest, given_only=False)
     extra += [p.replace(kind=inspect.Parameter.KEYWORD_ONLY) for p in inspect.signature(shared_options, eval_str=True).parameters.values()]
     extra += flag_parameters(Delivery, given_only=False) + flag_parameters(BeatOptions, given_only=False)
+    extra += flag_parameters(FormOptions, given_only=False, panel="The song's form")
     if choose_generator:
         extra.append(inspect.Parameter("generator", inspect.Parameter.KEYWORD_ONLY, default=GENERATOR, annotation=str))
     extra += flag_parameters(Finishing, given_only=False, panel="Finishing passes")
@@ -101,6 +104,7 @@ def dancing_command(backend: str, choose_generator: bool = True) -> Callable:
         def run(**values):
             flags = DanceFlags(generator=values.pop("generator", backend), asked=given_values(DanceRequest, values),
                                beats=BeatOptions(**given_values(BeatOptions, values)),
+                               form=FormOptions(**given_values(FormOptions, values)),
                                delivery=Delivery(**given_values(Delivery, values)),
                                finishing=Finishing(**given_values(Finishing, values)),
                                options=given_values(options_type, values) if options_type else {},
@@ -179,6 +183,11 @@ def dance_one(request: "DanceRequest", song: Path, outputs: Outputs, constraints
         loop = meta.get("loop")
         bars = loop and (f"{loop['bars']} bar" if loop["bars"] == 1 else f"{loop['bars']} bars")
         looped = f", a loop of {bars} of {loop['beats_per_bar']} beats" if loop else ""
+        returns = len(meta.get("returns") or [])
+        if meta.get("form"):
+            letters = " ".join(section["label"] for section in meta["form"])
+            looped += (f", form {letters}: {returns} return{'' if returns == 1 else 's'} danced as the first" if returns
+                       else f", form {letters}: every section danced afresh")
         done = (f"wrote {', '.join(written)}: {motion.duration:.1f} s of {meta.get('genre') or 'dance'} at "
                 f"{motion.fps:g} fps{looped} ({request.backend.name}, {how}{kept}; {seconds:.1f} s)")
         stderr_console.print(markup(done), highlight=False)

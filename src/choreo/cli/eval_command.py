@@ -27,6 +27,7 @@ def _load_dances(files: list[Path], fps: float, up: str, music_dir: Path | None,
     from ..metrics import Dance, resample_positions
     from ..formats import read_joint_positions
     from ..music import Music
+    from ..music.form import music_self_similarity
     from ..metrics.pfc import from_z_up
 
     dances, notes = [], []
@@ -38,12 +39,14 @@ def _load_dances(files: list[Path], fps: float, up: str, music_dir: Path | None,
             positions = resample_positions(positions, file_fps, fps)
             notes.append(f"{path.name}: resampled from {file_fps:g} to {fps:g} fps")
         audio = _find_music(path, music_dir)
-        beats = None
+        beats = bars = None
         if audio is not None:
-            music = Music.from_file(audio, timbre=False)
+            music = Music.from_file(audio)
             beats = np.round(music.beat_times * fps).astype(int)
             beats = beats[beats < len(positions)]
-        dances.append(Dance(path.stem, positions, beats))
+            lines, alike = music_self_similarity(music, 4)
+            bars = (lines * fps, alike)
+        dances.append(Dance(path.stem, positions, beats, bars))
         update(offset + i + 1, total, path.name)
     return dances, notes
 
@@ -57,10 +60,11 @@ def evaluate(
     json_path: Optional[Path] = typer.Option(None, "--json", help="Write every figure and per-file scores here."),
 ) -> None:
     """Score dances with BeatAlign, PFC, FID_k, FID_g, Div_k, Div_g, the two beat distances, stepping,
-    the legs and a classifier test (docs/metrics.md).
+    the legs, a classifier test and the form score (docs/metrics.md).
 
     FID and diversity features are normalised by the ground-truth set, as in Bailando.
-    BeatAlign needs music: a song with the motion's name beside it or in --music.
+    BeatAlign and the form score need music: a song with the motion's name beside it or in --music
+    (the form score reads bars of four beats).
 
     Examples:
       choreo eval out/ --gt data/test_clips/ --music songs/
@@ -132,6 +136,7 @@ def _print_report(report) -> None:
         ("pelvis speed (m/s)", report.legs.pelvis_speed, report.ground_truth_legs.pelvis_speed),
         ("foot jerk (m/s^3)", report.legs.foot_jerk, report.ground_truth_legs.foot_jerk),
         ("classifier test, balanced accuracy (0.5: indistinguishable)", report.classifier.accuracy, None),
+        ("form score (bar self-similarity ~ the music's)", report.form_score, report.ground_truth_form_score),
     ]  # fmt: skip
     for name, generated, truth in rows:
         table.add_row(name, _fmt(generated), _fmt(truth))

@@ -21,7 +21,8 @@ def render(
     motion: Path = typer.Argument(..., help="Motion file: BVH, NPZ, AIST++ pkl, JSON, glb; - reads stdin."),
     output: str = typer.Option(..., "-o", "--output", help="preview.mp4 (.mov/.mkv/.webm), .gif, .png (a strip of moments) or .html (a page any browser plays)."),
     music: Optional[Path] = typer.Option(None, help="Song to mux into the video (and whose beats --plot beats draws)."),
-    plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats) or 'path' (root from above)."),
+    plot: Optional[str] = typer.Option(None, help="Instead of the dancer: 'beats' (music vs motion beats), 'path' (root from above) or 'form' (the song's "
+                                             "sections and bar self-similarity beside the dance's; needs --music)."),
     size: str = typer.Option("640x480", help="Frame size WIDTHxHEIGHT in pixels."),
     fps: Optional[float] = typer.Option(None, parser=Number("--fps", 1, 120), help="Frame rate of the preview (default: the motion's; a GIF's is capped: GIF frame delays are coarse)."),
     strip: int = typer.Option(6, help="PNG: how many moments side by side (1: the middle frame)."),
@@ -35,6 +36,7 @@ def render(
       choreo render dance.bvh -o strip.png --strip 8
       choreo render dance.bvh --music song.mp3 --plot beats -o beats.png
       choreo render dance.bvh --plot path -o path.svg
+      choreo render dance.bvh --music song.mp3 --plot form -o form.png
     """
     from ..formats import read_motion
 
@@ -43,12 +45,12 @@ def render(
     if plot is not None:
         from ..render.plots import render_plot
 
-        beats = None
+        song = None
         if music is not None:
             from ..music import Music
 
-            beats = (Music.from_file(music, timbre=False).beat_times * dance.fps).round().astype(int)
-        render_plot(plot, dance, output, beats)
+            song = Music.from_file(music, timbre=plot == "form")
+        render_plot(plot, dance, output, song)
     elif Path(output).suffix.lower() == ".html":
         render_html(dance, output, music)
     else:

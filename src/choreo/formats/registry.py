@@ -54,7 +54,7 @@ FORMATS = {
         MotionFormat("bvh", ".bvh", "BVH, SMPL-24 skeleton (or a Mixamo rig's), metres, Y up", read_bvh_any_rig,
                      write_bvh),
         MotionFormat("npz", ".npz", "NPZ with AIST++ keys (smpl_poses, smpl_trans, ...)", read_npz, write_npz),
-        MotionFormat("pkl", ".pkl", "AIST++ motion pickle (60 fps on read)", read_aistpp_pkl, write_aistpp_pkl),
+        MotionFormat("pkl", ".pkl", "AIST++ motion pickle (60 fps unless choreo wrote another)", read_aistpp_pkl, write_aistpp_pkl),
         MotionFormat("json", ".json", "choreo motion JSON", read_json, write_json),
         MotionFormat("npy", ".npy", "joint positions (T, 24, 3), metres, Y up", None, write_npy),
         MotionFormat("glb", ".glb", "glTF 2.0 binary: SMPL-24 skin, a skinned body, the dance as its animation",

@@ -9,6 +9,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .beats import beat_align_score, beat_distances, motion_beats
+from .form import dance_form_score
 from .fid import diversity, frechet_distance, motion_features, normalise_by_reference
 from .legs import Legs, legs, mean_legs
 from .pfc import foot_contact_score, PFC_SCALE
@@ -23,6 +24,7 @@ class Dance:
     name: str
     positions: np.ndarray  # (T, 24, 3) metres, Y up, at the evaluation frame rate
     music_beats: np.ndarray | None = None  # beat frame indices at the same frame rate
+    music_bars: tuple[np.ndarray, np.ndarray] | None = None  # (bar line frames (B,), how alike they sound (B, B))
 
 
 @dataclass
@@ -36,6 +38,7 @@ class DanceScore:
     music_to_motion: float | None
     stepping: Stepping  # planted feet, feet against the root, the supporting foot's slide (stepping.py)
     legs: Legs  # feet around the pelvis, ankle lift, pelvis speed, foot jerk (legs.py)
+    form_score: float | None = None  # how the dance's bar self-similarity follows the music's (form.py)
 
 
 @dataclass
@@ -65,6 +68,8 @@ class EvaluationReport:
     legs: Legs  # the mean over clips of each legs figure (legs.py)
     ground_truth_legs: Legs
     classifier: TwoSample  # how well a logistic regression tells the generated windows from the ground truth's
+    form_score: float | None  # mean over clips with music (form.py)
+    ground_truth_form_score: float | None
     clips: list[DanceScore] = field(default_factory=list)
     ground_truth_clips: list[DanceScore] = field(default_factory=list)
 
@@ -78,9 +83,10 @@ def score_dance(dance: Dance, fps: float) -> DanceScore:
     if dance.music_beats is not None:
         align = beat_align_score(dance.music_beats, beats)
         m2m, music2m = beat_distances(dance.music_beats, beats)
+    form = dance_form_score(dance.positions, *dance.music_bars) if dance.music_bars is not None else None
     return DanceScore(dance.name, len(dance.positions), len(dance.positions) / fps, align,
                       foot_contact_score(dance.positions) * PFC_SCALE, m2m, music2m, stepping(dance.positions, fps),
-                      legs(dance.positions, fps))
+                      legs(dance.positions, fps), form)
 
 
 def _mean_of(values) -> float | None:
@@ -121,6 +127,8 @@ def evaluate(generated: Sequence[Dance], ground_truth: Sequence[Dance], fps: flo
         ground_truth_support_slide=truth_steps[2],
         legs=mean_legs([s.legs for s in scores]), ground_truth_legs=mean_legs([s.legs for s in truth_scores]),
         classifier=classifier_test([d.positions for d in generated], [d.positions for d in ground_truth], fps),
+        form_score=_mean_of(s.form_score for s in scores),
+        ground_truth_form_score=_mean_of(s.form_score for s in truth_scores),
         clips=scores, ground_truth_clips=truth_scores,
     )  # fmt: skip
 

@@ -7,16 +7,14 @@ import numpy as np
 
 from ..motion import Motion
 from ..motion.seam import next_cycle
+from .form import steps_and_changes
 
 
 def seam(motion: Motion) -> tuple[float, float]:
     """How a loop's seam compares with its own frame steps, played over and over: (the step from its
     last frame into the next cycle's first, the larger change of velocity there), each over the
     95th percentile of the same figure inside the dance; joints' moves averaged, in metres."""
-    positions = Motion.concatenate([motion, next_cycle(motion, 2)]).joint_positions()
-    moves = np.diff(positions, axis=0)
-    steps = np.linalg.norm(moves, axis=-1).mean(axis=1)
-    changes = np.linalg.norm(np.diff(moves, axis=0), axis=-1).mean(axis=1)
+    steps, changes = steps_and_changes(Motion.concatenate([motion, next_cycle(motion, 2)]).joint_positions())
     last = motion.num_frames - 1  # the step from the last frame into the next cycle
     inside = np.delete(steps, last)
     inside_changes = np.delete(changes, [last - 1, last])

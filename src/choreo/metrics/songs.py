@@ -18,7 +18,7 @@ from .whole_song import whole_song
 
 FPS = 30.0  # every figure is taken at 30 fps
 COLUMNS = ("pace", "reach", "planted", "foot_root", "slide", "jerk", "root_jerk", "body_jerk", "beat_align", "beat_dip",
-           "feet_speed", "ankle_lift", "pelvis_speed", "foot_jerk")
+           "feet_speed", "ankle_lift", "pelvis_speed", "foot_jerk", "form")
 BOOTSTRAP = 300  # resamplings of the windows behind each FID's interval
 
 
@@ -40,10 +40,17 @@ def song_of(clip) -> Music:
                            log_mel=True, timbre=True)
 
 
-def figures(positions: np.ndarray, music: Music) -> dict:
-    """One dance's row (COLUMNS): choreo.metrics.whole_song's figures and BeatAlign against ``music``."""
+def figures(positions: np.ndarray, music: Music, style: str | None = None) -> dict:
+    """One dance's row (COLUMNS): choreo.metrics.whole_song's figures, BeatAlign against ``music`` and
+    the form score (bars of the style's metre)."""
+    from ..music.form import beats_per_bar, music_self_similarity
+    from .form import dance_form_score
+
     row = whole_song(positions, FPS).to_dict()
     row["beat_align"] = beat_align_score(music.beat_frames, motion_beats(positions))
+    bars, alike = music_self_similarity(music, beats_per_bar(style))
+    score = dance_form_score(positions, bars * FPS, alike)
+    row["form"] = float("nan") if score is None else score
     return row
 
 

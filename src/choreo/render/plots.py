@@ -1,4 +1,5 @@
-"""Diagnostic plots: music beats against motion beats over time, and the root path from above."""
+"""Diagnostic plots: music beats against motion beats over time, the root path from above, and the
+song's form beside the dance's (bar self-similarities)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from ..metrics.beats import beat_align_score
 from ..motion import Motion
 from ..motion.beats import smoothed_speed, speed_minima
 
-PLOTS = ("beats", "path")
+PLOTS = ("beats", "path", "form")
 PLOT_SUFFIXES = {".png", ".svg", ".pdf"}
 
 
@@ -61,6 +62,40 @@ def plot_path(motion: Motion, path: Path) -> None:
     _save(plt, figure, path)
 
 
+def plot_form(motion: Motion, music, path: Path) -> None:
+    """The music's bar self-similarity with its sections (the dance's own form when it carries one,
+    else the analysed), and the dance's beside it on the same bars, titled with the form score."""
+    from ..metrics.form import dance_bar_features, form_score, self_similarity
+    from ..music.form import analyse_form, beats_per_bar, music_self_similarity
+
+    per_bar = beats_per_bar(motion.metadata.get("genre") or motion.metadata.get("style"))
+    bars, music_alike = music_self_similarity(music, per_bar)
+    lines = np.append(bars, bars[-1] + np.median(np.diff(bars))) * motion.fps if len(bars) >= 2 else bars
+    whole = int(np.sum(lines[1:] <= motion.num_frames)) if len(lines) >= 2 else 0
+    if whole < 4:
+        raise ParameterError("a form plot needs a dance and a song of at least four whole bars")
+    dance_alike = self_similarity(dance_bar_features(motion.joint_positions(), lines[:whole + 1]))
+    music_alike = music_alike[:whole, :whole]
+    given = motion.metadata.get("form")
+    sections = [(s["start"], s["label"]) for s in given] if given else \
+        [(s.start, s.label) for s in analyse_form(music, per_bar).sections]
+    plt, figure, axes = _figure(11, 5.2)
+    figure.clf()
+    panels = figure.subplots(1, 2)
+    starts = np.searchsorted(bars[:whole], [start for start, _ in sections], side="left")
+    for panel, alike, title in ((panels[0], music_alike, "music"), (panels[1], dance_alike, "dance")):
+        panel.imshow(alike, origin="lower", cmap="magma", interpolation="nearest")
+        for bar, (_, label) in zip(starts, sections):
+            if bar < whole:
+                panel.axvline(bar - 0.5, color="#7fd", linewidth=0.8)
+                panel.axhline(bar - 0.5, color="#7fd", linewidth=0.8)
+                panel.text(bar, whole + 0.3, label, color="#222", fontsize=9, va="bottom")
+        panel.set(xlabel="bar", ylabel="bar", title=f"{title}: bar self-similarity")
+    figure.suptitle(f"form {', '.join(label for _, label in sections)}; form score "
+                    f"{form_score(dance_alike, music_alike):.3f} (1: the dance follows the music's returns)")
+    _save(plt, figure, path)
+
+
 def _save(plt, figure, path: Path) -> None:
     figure.tight_layout()
     with atomic_path(path) as temporary:
@@ -68,13 +103,22 @@ def _save(plt, figure, path: Path) -> None:
     plt.close(figure)
 
 
-def render_plot(kind: str, motion: Motion, path: str | Path, music_beat_frames: np.ndarray | None = None) -> Path:
+def render_plot(kind: str, motion: Motion, path: str | Path, music=None) -> Path:
+    """Draw plot ``kind`` of ``motion`` (and ``music``, a choreo.music.Music, if given) to ``path``."""
     path = Path(path)
     if kind not in PLOTS:
-        raise ParameterError(f"unknown plot {kind!r} (use {' or '.join(PLOTS)})")
+        raise ParameterError(f"unknown plot {kind!r} (use {', '.join(PLOTS)})")
     if path.suffix.lower() not in PLOT_SUFFIXES:
         raise OutputError(f"cannot write a plot to {path.name}: use .png, .svg or .pdf")
     if motion.num_frames < 3:
         raise ParameterError("a plot needs a motion of at least 3 frames")
-    (plot_beats(motion, music_beat_frames, path) if kind == "beats" else plot_path(motion, path))
+    if kind == "form":
+        if music is None:
+            raise ParameterError("--plot form needs the song: give --music")
+        plot_form(motion, music, path)
+    elif kind == "beats":
+        beats = None if music is None else (music.beat_times * motion.fps).round().astype(int)
+        plot_beats(motion, beats, path)
+    else:
+        plot_path(motion, path)
     return path
