@@ -10,8 +10,8 @@ import contextlib
 import errno
 import os
 import stat
+import secrets
 import sys
-import tempfile
 from pathlib import Path
 from typing import IO, Iterator
 
@@ -211,13 +211,15 @@ def atomic_path(path: str | os.PathLike, follow_links: bool = True) -> Iterator[
     it, like ffmpeg); it replaces ``path`` only if the block succeeds. OS errors on the way (a name
     too long, a full disk) are output errors (exit 3). ``follow_links``: see :func:`output_target`."""
     target = output_target(path, follow_links)
+    tmp_name = temporary_beside(target)  # named before it exists: a signal any time after leaves nothing
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.stem[:100]}.", suffix=f".tmp{target.suffix[:20]}",
-                                        dir=target.parent or ".")
-    except OSError as error:
-        raise OutputError(f"cannot write {path}: {error.strerror}") from None
-    os.close(fd)
-    try:
+        try:
+            os.close(os.open(tmp_name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        except FileExistsError:  # another writer's temporary by that name (1 in 2^48): ours never existed
+            tmp_name = None
+            raise OutputError(f"cannot write {path}: a temporary of that name exists") from None
+        except OSError as error:
+            raise OutputError(f"cannot write {path}: {error.strerror}") from None
         with out_of_space_is_an_output_error(path):
             yield Path(tmp_name)
         os.chmod(tmp_name, output_mode(target))
@@ -226,9 +228,16 @@ def atomic_path(path: str | os.PathLike, follow_links: bool = True) -> Iterator[
         except OSError as error:
             raise OutputError(f"cannot write {path}: {error.strerror}") from None
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp_name)
+        if tmp_name is not None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp_name)
         raise
+
+
+def temporary_beside(target: Path) -> str:
+    """A fresh name for a temporary beside ``target``: hidden, its stem and extension kept (tools
+    infer the format from it), 48 random bits; created by the caller with O_EXCL, as mkstemp would."""
+    return os.path.join(target.parent or ".", f".{target.stem[:100]}.{secrets.token_hex(6)}.tmp{target.suffix[:20]}")
 
 
 @contextlib.contextmanager

@@ -105,7 +105,6 @@ KNOWN = {  # surface: {kind: pattern every problem of a case matches}; found by 
     "signals": {
         "commit window": r"some outputs but not all",  # a signal between two of write_motions' renames
         "second signal after the unwinding": r"killed by SIG(INT|TERM) after the unwinding",  # handlers put back
-        "temporary left": r"temporaries left: \[(\('\.B\.[^']*', \d+\)(, )?)+\]$",  # a signal right after mkstemp
     },
     "writers": {},
 }

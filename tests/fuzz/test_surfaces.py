@@ -183,21 +183,19 @@ def test_a_pkl_written_at_240_fps_reads_back_at_240(fuzz, case):
     assert fuzz.read_back(case / "out.pkl", 240.0, None) == ""
 
 
-@pytest.mark.xfail(strict=True, reason="issue 59 fuzzing: a signal just after mkstemp leaves the empty temporary")
 def test_a_signal_just_after_a_temporary_is_made_leaves_none(fuzz, case):
-    import tempfile
+    make = os.open
 
-    make = tempfile.mkstemp
-
-    def make_then_signal(*args, **kwargs):  # in the child only: the file made, then Ctrl-C at that moment
-        made = make(*args, **kwargs)
-        os.kill(os.getpid(), signal.SIGINT)
+    def make_then_signal(name, flags, *args, **kwargs):  # in the child only: the temporary made, then Ctrl-C
+        made = make(name, flags, *args, **kwargs)
+        if flags & os.O_EXCL and os.path.basename(name).startswith(".B."):
+            os.kill(os.getpid(), signal.SIGINT)
         return made
 
     motion = fuzz.dance(2, fps=240.0)
 
     def app(**_):
-        tempfile.mkstemp = make_then_signal
+        os.open = make_then_signal
         return fuzz._writing_app(motion, ["B.bvh", "B.npz"], None)()
 
     result = fuzz.forked(["generate"], case, app=app)
