@@ -50,7 +50,6 @@ def info(
     """
     _require_file(path)
     from ..errors import ParameterError
-    from ..form.options import FormOptions
 
     is_song = path.suffix.lower() in AUDIO_EXTENSIONS
     beat_options = BeatOptions(**given_values(BeatOptions, flags))

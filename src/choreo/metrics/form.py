@@ -127,10 +127,10 @@ def form_score(dance_ssm, music_ssm, min_lag: int = MIN_LAG) -> float:
     return float(np.clip((x @ y) / np.sqrt((x @ x) * (y @ y)), -1.0, 1.0))
 
 
-def dance_form_score(positions, bar_lines, music_ssm) -> float | None:
-    """The form score of a dance to the music whose bars start at frames ``bar_lines`` (B,) and
-    sound alike as ``music_ssm`` (B, B) says (choreo.music.form.music_self_similarity); the bars
-    the dance covers whole. None with under four of them."""
+def bar_similarities(positions, bar_lines, music_ssm) -> tuple[np.ndarray, np.ndarray] | None:
+    """(the dance's, the music's) bar self-similarity over the bars the dance covers whole, the
+    music's bars starting at frames ``bar_lines`` (B,) and sounding alike as ``music_ssm`` (B, B)
+    says (choreo.music.form.music_self_similarity). None with under four whole bars."""
     lines = np.asarray(bar_lines, dtype=np.float64)
     if len(lines) < 2:
         return None
@@ -138,8 +138,13 @@ def dance_form_score(positions, bar_lines, music_ssm) -> float | None:
     whole = int(np.sum(lines[1:] <= len(positions)))
     if whole < 4:
         return None
-    dance = self_similarity(dance_bar_features(positions, lines[:whole + 1]))
-    return form_score(dance, np.asarray(music_ssm)[:whole, :whole])
+    return self_similarity(dance_bar_features(positions, lines[:whole + 1])), np.asarray(music_ssm)[:whole, :whole]
+
+
+def dance_form_score(positions, bar_lines, music_ssm) -> float | None:
+    """The form score of a dance to the music (:func:`bar_similarities`); None under four whole bars."""
+    both = bar_similarities(positions, bar_lines, music_ssm)
+    return None if both is None else form_score(*both)
 
 
 # -- phrases -------------------------------------------------------------------------------------

@@ -17,13 +17,13 @@ PLOTS = ("beats", "path", "form")
 PLOT_SUFFIXES = {".png", ".svg", ".pdf"}
 
 
-def _figure(width: float, height: float):
+def _figure(width: float, height: float, columns: int = 1):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    return plt, *plt.subplots(figsize=(width, height), dpi=120)
+    return plt, *plt.subplots(1, columns, figsize=(width, height), dpi=120)
 
 
 def plot_beats(motion: Motion, music_beat_frames: np.ndarray | None, path: Path) -> None:
@@ -65,23 +65,20 @@ def plot_path(motion: Motion, path: Path) -> None:
 def plot_form(motion: Motion, music, path: Path) -> None:
     """The music's bar self-similarity with its sections (the dance's own form when it carries one,
     else the analysed), and the dance's beside it on the same bars, titled with the form score."""
-    from ..metrics.form import dance_bar_features, form_score, self_similarity
+    from ..metrics.form import bar_similarities, form_score
     from ..music.form import analyse_form, beats_per_bar, music_self_similarity
 
     per_bar = beats_per_bar(motion.metadata.get("genre") or motion.metadata.get("style"))
     bars, music_alike = music_self_similarity(music, per_bar)
-    lines = np.append(bars, bars[-1] + np.median(np.diff(bars))) * motion.fps if len(bars) >= 2 else bars
-    whole = int(np.sum(lines[1:] <= motion.num_frames)) if len(lines) >= 2 else 0
-    if whole < 4:
+    both = bar_similarities(motion.joint_positions(), bars * motion.fps, music_alike)
+    if both is None:
         raise ParameterError("a form plot needs a dance and a song of at least four whole bars")
-    dance_alike = self_similarity(dance_bar_features(motion.joint_positions(), lines[:whole + 1]))
-    music_alike = music_alike[:whole, :whole]
+    dance_alike, music_alike = both
+    whole = len(music_alike)
     given = motion.metadata.get("form")
     sections = [(s["start"], s["label"]) for s in given] if given else \
         [(s.start, s.label) for s in analyse_form(music, per_bar).sections]
-    plt, figure, axes = _figure(11, 5.2)
-    figure.clf()
-    panels = figure.subplots(1, 2)
+    plt, figure, panels = _figure(11, 5.2, columns=2)
     starts = np.searchsorted(bars[:whole], [start for start, _ in sections], side="left")
     for panel, alike, title in ((panels[0], music_alike, "music"), (panels[1], dance_alike, "dance")):
         panel.imshow(alike, origin="lower", cmap="magma", interpolation="nearest")
@@ -89,7 +86,7 @@ def plot_form(motion: Motion, music, path: Path) -> None:
             if bar < whole:
                 panel.axvline(bar - 0.5, color="#7fd", linewidth=0.8)
                 panel.axhline(bar - 0.5, color="#7fd", linewidth=0.8)
-                panel.text(bar, whole + 0.3, label, color="#222", fontsize=9, va="bottom")
+                panel.text(bar - 0.3, whole - 0.7, label, color="white", fontsize=10, va="top", weight="bold")
         panel.set(xlabel="bar", ylabel="bar", title=f"{title}: bar self-similarity")
     figure.suptitle(f"form {', '.join(label for _, label in sections)}; form score "
                     f"{form_score(dance_alike, music_alike):.3f} (1: the dance follows the music's returns)")
