@@ -3,7 +3,6 @@ the dance's metadata, loops and both backends."""
 
 import json
 
-import numpy as np
 import pytest
 import soundfile
 

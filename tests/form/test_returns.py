@@ -2,7 +2,6 @@
 beats, placed where the dancer stands, joined without a seam."""
 
 import numpy as np
-import pytest
 
 from choreo.form.returns import JOIN_SECONDS, plan_returns, source_frames, with_returns
 from choreo.metrics.form import phrase_distance, return_ratio, seam_steps

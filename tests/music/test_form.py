@@ -5,7 +5,7 @@ import pytest
 
 from choreo.errors import ParameterError
 from choreo.music import Music
-from choreo.music.form import Form, Section, analyse_form, beats_per_bar, letters, music_self_similarity, parse_form
+from choreo.music.form import Form, analyse_form, beats_per_bar, letters, music_self_similarity, parse_form
 
 from .helpers import form_song
 
